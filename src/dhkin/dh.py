@@ -1,0 +1,402 @@
+"""DH tables: parsing and validation of table files, link transforms and batched forward kinematics.
+
+Conventions (see DESIGN.md, "The DH table file"):
+
+* ``standard`` (distal, Denavit-Hartenberg 1955 / Spong):
+  ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``; joint i turns about z_{i-1}.
+* ``modified`` (proximal, Craig): ``A_i = Rx(alpha_i) Tx(a_i) Rz(theta_i) Tz(d_i)``, where the
+  table's alpha_i and a_i of row i are Craig's alpha_{i-1} and a_{i-1}; joint i turns about z_i.
+* Revolute joint: ``theta_i = direction_i * q_i + offset_i``. Prismatic joint:
+  ``d_i = direction_i * q_i + offset_i`` with ``theta_i`` fixed (key ``theta``).
+* ``T(q) = base @ A_1 ... A_n @ tool``: base_link -> DH frame 0 -> DH frame n -> tool0.
+* ``flange`` (optional): DH frame n -> the ``flange`` frame of the URDF; default rpy (0, -90, 0) deg,
+  which puts the flange's x axis along the last joint axis (ROS-Industrial). Vendors differ in
+  the flange's other axes (UR: rpy (0, -90, -90)), so a table may state it.
+
+Inside a :class:`DHTable` everything is SI: metres and radians (m/s, rad/s for velocities).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import yaml
+from numpy.typing import ArrayLike, NDArray
+
+from dhkin.errors import DHError
+from dhkin.transforms import xyz_rpy_to_matrix
+
+Convention = Literal["standard", "modified"]
+JointType = Literal["revolute", "prismatic"]
+
+CONVENTIONS: tuple[str, ...] = ("standard", "modified")
+JOINT_TYPES: tuple[str, ...] = ("revolute", "prismatic")
+LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3}
+ANGLE_UNITS: dict[str, float] = {"rad": 1.0, "deg": math.pi / 180.0}
+#: Names the generator uses for fixed frames; a table may not give them to its own links.
+RESERVED_LINK_NAMES: tuple[str, ...] = ("base_link", "base", "flange", "tool0")
+
+_TOP_KEYS_REQUIRED = ("name", "convention", "units", "joints")
+_TOP_KEYS_OPTIONAL = ("description", "source", "base", "tool", "flange")
+#: Default DH frame n -> flange: x along the last joint axis (ROS-Industrial), rpy (0, -90, 0) deg.
+DEFAULT_FLANGE_RPY_DEG = (0.0, -90.0, 0.0)
+_JOINT_KEYS_COMMON = ("name", "link", "type", "a", "alpha", "offset", "direction", "lower",
+                      "upper", "velocity", "effort")
+_NAME_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_\-]*$")
+
+
+@dataclass(frozen=True)
+class Joint:
+    """One DH row, in SI units (m, rad).
+
+    ``d`` is the fixed offset along z for a revolute joint; ``theta`` the fixed angle for a
+    prismatic one. ``offset`` is added to the joint variable (rad for revolute, m for prismatic).
+    ``lower``/``upper`` bound the joint value q (URDF convention, before direction and offset).
+    """
+
+    name: str
+    link: str
+    type: JointType
+    a: float
+    alpha: float
+    d: float
+    theta: float
+    offset: float
+    direction: int
+    lower: float
+    upper: float
+    velocity: float
+    effort: float
+
+    @property
+    def is_revolute(self) -> bool:
+        return self.type == "revolute"
+
+
+@dataclass(frozen=True)
+class DHTable:
+    """A robot described by a DH table. All values SI (m, rad); transforms 4x4."""
+
+    name: str
+    convention: Convention
+    joints: tuple[Joint, ...]
+    base: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
+    tool: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
+    flange: NDArray[np.float64] = field(default_factory=lambda: _default_flange())
+    description: str = ""
+    source: str = ""
+    path: Path | None = None
+
+    @property
+    def dof(self) -> int:
+        return len(self.joints)
+
+    @property
+    def lower(self) -> NDArray[np.float64]:
+        return np.array([j.lower for j in self.joints])
+
+    @property
+    def upper(self) -> NDArray[np.float64]:
+        return np.array([j.upper for j in self.joints])
+
+    @property
+    def joint_names(self) -> list[str]:
+        return [j.name for j in self.joints]
+
+    def dh_parameters(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """theta (N, n) and d (N, n) for joint values q of shape (N, n)."""
+        Q = np.asarray(q, dtype=float)
+        direction = np.array([j.direction for j in self.joints], dtype=float)
+        offset = np.array([j.offset for j in self.joints])
+        revolute = np.array([j.is_revolute for j in self.joints])
+        variable = direction * Q + offset
+        theta = np.where(revolute, variable, np.array([j.theta for j in self.joints]))
+        d = np.where(revolute, np.array([j.d for j in self.joints]), variable)
+        return theta, d
+
+    def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
+        """A_i(q) for every joint: (N, n) joint values -> (N, n, 4, 4)."""
+        Q = _as_batch(q, self.dof)
+        theta, d = self.dh_parameters(Q)
+        a = np.array([j.a for j in self.joints])
+        alpha = np.array([j.alpha for j in self.joints])
+        return dh_matrices(self.convention, theta, d, a, alpha)
+
+    def fk_frames(self, q: ArrayLike) -> NDArray[np.float64]:
+        """base_link -> DH frames 0..n, shape (N, n + 1, 4, 4) for q of shape (N, n)."""
+        A = self.link_transforms(q)
+        N = A.shape[0]
+        frames = np.empty((N, self.dof + 1, 4, 4))
+        frames[:, 0] = self.base
+        for i in range(self.dof):
+            frames[:, i + 1] = frames[:, i] @ A[:, i]
+        return frames
+
+    def fk(self, q: ArrayLike) -> NDArray[np.float64]:
+        """base_link -> tool0. q: (n,) -> (4, 4); (N, n) -> (N, 4, 4)."""
+        Q = np.asarray(q, dtype=float)
+        single = Q.ndim == 1
+        A = self.link_transforms(Q)
+        T = np.broadcast_to(self.base, (A.shape[0], 4, 4)).copy()
+        for i in range(self.dof):
+            T = T @ A[:, i]
+        T = T @ self.tool
+        return T[0] if single else T
+
+    def in_limits(self, q: ArrayLike, tolerance: float = 0.0) -> NDArray[np.bool_]:
+        """Whether each joint vector lies within [lower - tol, upper + tol] (last axis = joints)."""
+        Q = np.asarray(q, dtype=float)
+        return np.all((self.lower - tolerance <= Q) & (self.upper + tolerance >= Q), axis=-1)
+
+    def random_q(self, n: int, rng: np.random.Generator) -> NDArray[np.float64]:
+        """n joint vectors drawn uniformly within the limits, shape (n, dof)."""
+        return rng.uniform(self.lower, self.upper, size=(n, self.dof))
+
+
+def dh_matrices(
+    convention: str,
+    theta: NDArray[np.float64],
+    d: NDArray[np.float64],
+    a: NDArray[np.float64],
+    alpha: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """DH link transforms for arrays of parameters (any common broadcast shape S) -> S + (4, 4)."""
+    theta, d, a, alpha = np.broadcast_arrays(theta, d, a, alpha)
+    ct, st = np.cos(theta), np.sin(theta)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    zero, one = np.zeros_like(ct), np.ones_like(ct)
+    if convention == "standard":
+        rows = [
+            [ct, -st * ca, st * sa, a * ct],
+            [st, ct * ca, -ct * sa, a * st],
+            [zero, sa, ca, d],
+        ]
+    elif convention == "modified":
+        rows = [
+            [ct, -st, zero, a],
+            [st * ca, ct * ca, -sa, -sa * d],
+            [st * sa, ct * sa, ca, ca * d],
+        ]
+    else:
+        raise DHError(f"convention: expected one of {CONVENTIONS}, got {convention!r}")
+    rows.append([zero, zero, zero, one])
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+
+
+def _default_flange() -> NDArray[np.float64]:
+    return xyz_rpy_to_matrix((0, 0, 0), np.radians(DEFAULT_FLANGE_RPY_DEG))
+
+
+def _as_batch(q: ArrayLike, dof: int) -> NDArray[np.float64]:
+    Q = np.asarray(q, dtype=float)
+    if Q.ndim == 1:
+        Q = Q[None, :]
+    if Q.ndim != 2 or Q.shape[1] != dof:
+        raise DHError(f"q: expected shape ({dof},) or (N, {dof}), got {np.shape(q)}")
+    if not np.all(np.isfinite(Q)):
+        raise DHError("q: expected finite joint values, got NaN or inf")
+    return Q
+
+
+# --------------------------------------------------------------------------------------------
+# Parsing
+
+
+def load_table(path: str | Path) -> DHTable:
+    """Read and validate a DH table file (YAML). Raises :class:`DHError` naming file and field."""
+    file = Path(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise DHError(f"{file}: cannot read DH table file ({exc.strerror})") from exc
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise DHError(f"{file}: not valid YAML ({exc})") from exc
+    return parse_table(data, source=str(file), path=file)
+
+
+def parse_table(data: Any, source: str = "<table>", path: Path | None = None) -> DHTable:
+    """Validate a table given as a mapping (the parsed YAML) and convert it to SI units."""
+    where = _Where(source)
+    if not isinstance(data, Mapping):
+        raise DHError(f"{source}: expected a mapping with keys {_TOP_KEYS_REQUIRED}, "
+                      f"got {type(data).__name__}")
+    _check_keys(data, _TOP_KEYS_REQUIRED, _TOP_KEYS_OPTIONAL, where, "")
+
+    name = _name(data["name"], where, "name")
+    convention = data["convention"]
+    if convention not in CONVENTIONS:
+        raise DHError(where.msg("convention", f"expected one of {list(CONVENTIONS)}, "
+                                              f"got {convention!r}"))
+    length_scale, angle_scale = _units(data["units"], where)
+
+    joints_data = data["joints"]
+    if not isinstance(joints_data, Sequence) or isinstance(joints_data, str):
+        raise DHError(where.msg("joints", "expected a list of joint entries, "
+                                          f"got {type(joints_data).__name__}"))
+    if len(joints_data) == 0:
+        raise DHError(where.msg("joints", "expected at least one joint, got an empty list"))
+    joints = tuple(
+        _joint(entry, i, where, length_scale, angle_scale) for i, entry in enumerate(joints_data)
+    )
+    _check_unique([j.name for j in joints], where, "name")
+    _check_unique([j.link for j in joints], where, "link")
+
+    base = _frame(data.get("base"), where, "base", length_scale, angle_scale)
+    tool = _frame(data.get("tool"), where, "tool", length_scale, angle_scale)
+    flange = (_frame(data["flange"], where, "flange", length_scale, angle_scale)
+              if "flange" in data else _default_flange())
+    description = _text(data.get("description", ""), where, "description")
+    source_text = _text(data.get("source", ""), where, "source")
+    return DHTable(name=name, convention=convention, joints=joints, base=base, tool=tool, flange=flange,
+                   description=description, source=source_text, path=path)
+
+
+class _Where:
+    """Formats error messages as '<file>: <field>: <what was expected>'."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def msg(self, field_name: str, expected: str) -> str:
+        return f"{self.source}: {field_name}: {expected}"
+
+
+def _check_keys(data: Mapping[str, Any], required: Sequence[str], optional: Sequence[str],
+                where: _Where, prefix: str) -> None:
+    allowed = list(required) + list(optional)
+    for key in data:
+        if key not in allowed:
+            raise DHError(where.msg(f"{prefix}{key}", f"unknown key; expected one of {allowed}"))
+    for key in required:
+        if key not in data:
+            raise DHError(where.msg(f"{prefix}{key}", "missing required key"))
+
+
+def _number(value: Any, where: _Where, field_name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DHError(where.msg(field_name, f"expected a finite number, got {value!r}"))
+    if not math.isfinite(value):
+        raise DHError(where.msg(field_name, f"expected a finite number, got {value!r}"))
+    return float(value)
+
+
+def _text(value: Any, where: _Where, field_name: str) -> str:
+    if not isinstance(value, str):
+        raise DHError(where.msg(field_name, f"expected text, got {value!r}"))
+    return value
+
+
+def _name(value: Any, where: _Where, field_name: str) -> str:
+    if not isinstance(value, str) or not _NAME_PATTERN.match(value):
+        raise DHError(where.msg(field_name, "expected a name of letters, digits, '_' or '-' "
+                                            f"starting with a letter or '_', got {value!r}"))
+    return value
+
+
+def _units(value: Any, where: _Where) -> tuple[float, float]:
+    if not isinstance(value, Mapping):
+        raise DHError(where.msg("units", "expected a mapping {length: m|mm, angle: deg|rad}, "
+                                         f"got {value!r}"))
+    _check_keys(value, ("length", "angle"), (), where, "units.")
+    length, angle = value["length"], value["angle"]
+    if length not in LENGTH_UNITS:
+        raise DHError(where.msg("units.length", f"expected one of {list(LENGTH_UNITS)}, "
+                                                f"got {length!r}"))
+    if angle not in ANGLE_UNITS:
+        raise DHError(where.msg("units.angle", f"expected one of {list(ANGLE_UNITS)}, "
+                                               f"got {angle!r}"))
+    return LENGTH_UNITS[length], ANGLE_UNITS[angle]
+
+
+def _vector3(value: Any, where: _Where, field_name: str) -> list[float]:
+    if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 3:
+        raise DHError(where.msg(field_name, f"expected a list of 3 numbers, got {value!r}"))
+    return [_number(v, where, f"{field_name}[{k}]") for k, v in enumerate(value)]
+
+
+def _frame(value: Any, where: _Where, field_name: str, length_scale: float,
+           angle_scale: float) -> NDArray[np.float64]:
+    if value is None:
+        return np.eye(4)
+    if not isinstance(value, Mapping):
+        raise DHError(where.msg(field_name, f"expected a mapping {{xyz: [x, y, z], rpy: [r, p, y]}},"
+                                            f" got {value!r}"))
+    _check_keys(value, (), ("xyz", "rpy"), where, f"{field_name}.")
+    xyz = np.array(_vector3(value.get("xyz", [0, 0, 0]), where, f"{field_name}.xyz"))
+    rpy = np.array(_vector3(value.get("rpy", [0, 0, 0]), where, f"{field_name}.rpy"))
+    return xyz_rpy_to_matrix(xyz * length_scale, rpy * angle_scale)
+
+
+def _joint(entry: Any, index: int, where: _Where, length_scale: float,
+           angle_scale: float) -> Joint:
+    label = f"joints[{index}]"
+    if not isinstance(entry, Mapping):
+        raise DHError(where.msg(label, f"expected a mapping of DH values, got {entry!r}"))
+    joint_type = entry.get("type", "revolute")
+    if joint_type not in JOINT_TYPES:
+        raise DHError(where.msg(f"{label}.type", f"expected one of {list(JOINT_TYPES)}, "
+                                                 f"got {joint_type!r}"))
+    revolute = joint_type == "revolute"
+    # The joint variable replaces theta (revolute) or d (prismatic): the other one is fixed.
+    fixed_key = "d" if revolute else "theta"
+    required = ("a", "alpha", "lower", "upper") + (("d",) if revolute else ())
+    optional = tuple(k for k in _JOINT_KEYS_COMMON if k not in required)
+    optional += () if revolute else ("theta",)
+    for wrong in (("theta",) if revolute else ("d",)):
+        if wrong in entry:
+            variable = "theta" if revolute else "d"
+            raise DHError(where.msg(f"{label}.{wrong}",
+                                    f"a {joint_type} joint's {variable} is its joint variable; "
+                                    f"give its constant part as 'offset' and the fixed "
+                                    f"{fixed_key} as '{fixed_key}'"))
+    _check_keys(entry, required, optional, where, f"{label}.")
+
+    def num(key: str, default: float = 0.0) -> float:
+        return _number(entry.get(key, default), where, f"{label}.{key}")
+
+    variable_scale = angle_scale if revolute else length_scale
+    name = _name(entry.get("name", f"joint_{index + 1}"), where, f"{label}.name")
+    link = _name(entry.get("link", f"link_{index + 1}"), where, f"{label}.link")
+    if link in RESERVED_LINK_NAMES:
+        raise DHError(where.msg(f"{label}.link", f"{link!r} is reserved for a fixed frame; "
+                                                 f"expected a name other than "
+                                                 f"{list(RESERVED_LINK_NAMES)}"))
+    direction = entry.get("direction", 1)
+    if isinstance(direction, bool) or direction not in (1, -1):
+        raise DHError(where.msg(f"{label}.direction", f"expected 1 or -1, got {direction!r}"))
+    lower = num("lower") * variable_scale
+    upper = num("upper") * variable_scale
+    if not lower < upper:
+        raise DHError(where.msg(f"{label}.lower", f"expected lower < upper, got lower = "
+                                                  f"{entry['lower']!r}, upper = {entry['upper']!r}"))
+    velocity = num("velocity") * variable_scale
+    effort = num("effort")
+    for key, value in (("velocity", velocity), ("effort", effort)):
+        if value < 0:
+            raise DHError(where.msg(f"{label}.{key}", f"expected a value >= 0, got {value!r}"))
+    return Joint(
+        name=name, link=link, type=joint_type,
+        a=num("a") * length_scale, alpha=num("alpha") * angle_scale,
+        d=num("d") * length_scale if revolute else 0.0,
+        theta=0.0 if revolute else num("theta") * angle_scale,
+        offset=num("offset") * variable_scale, direction=int(direction),
+        lower=lower, upper=upper, velocity=velocity, effort=effort,
+    )
+
+
+def _check_unique(names: list[str], where: _Where, key: str) -> None:
+    seen: dict[str, int] = {}
+    for i, n in enumerate(names):
+        if n in seen:
+            raise DHError(where.msg(f"joints[{i}].{key}", f"duplicate {key} {n!r} (also "
+                                                          f"joints[{seen[n]}]); expected unique "
+                                                          f"{key}s"))
+        seen[n] = i

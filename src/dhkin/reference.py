@@ -1,0 +1,174 @@
+"""Pinocchio-backed reference (the oracle): forward kinematics, Jacobians and manipulability.
+
+A :class:`Reference` wraps a Pinocchio model built from URDF text. Joint vectors are given in
+*chain order*: the actuated joints on the path from the root to ``tip``, base to tip, one value
+each (radians or metres). Continuous joints (Pinocchio stores cos/sin, nq = 2, nv = 1) and joints
+off the chain are handled by the mapping, so a vendor URDF with other link names and fixed frames
+can be driven with the same 6-vector as a DH table.
+
+Poses are ``base -> frame`` 4x4 transforms, where ``base`` is a frame of the model (default: the
+root link, which Pinocchio calls the universe).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike, NDArray
+
+from dhkin.errors import URDFError
+
+ReferenceFrameName = Literal["local", "world", "local_world_aligned"]
+REFERENCE_FRAMES: dict[str, pin.ReferenceFrame] = {
+    "local": pin.ReferenceFrame.LOCAL,
+    "world": pin.ReferenceFrame.WORLD,
+    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+}
+
+
+@dataclass(frozen=True)
+class Manipulability:
+    """Manipulability measures of a 6xn Jacobian (in LOCAL_WORLD_ALIGNED at the frame origin).
+
+    ``yoshikawa`` = sqrt(det(J J^T)) (= |det J| for a square J); ``translational`` and
+    ``rotational`` use the linear (rows 0-2) and angular (rows 3-5) blocks. ``singular_values`` are
+    sorted descending; ``condition`` = sigma_max / sigma_min (inf at a singularity). Linear rows
+    are in m/rad (m per unit joint value) and angular rows in rad/rad, so the singular values mix
+    units; they are meaningful for rank and distance-to-singularity, not as one physical quantity.
+    """
+
+    yoshikawa: float
+    translational: float
+    rotational: float
+    singular_values: NDArray[np.float64]
+    sigma_min: float
+    condition: float
+
+
+class Reference:
+    """Pinocchio model of a URDF, driven through the actuated joints of one chain."""
+
+    def __init__(self, urdf_text: str, tip: str = "tool0", base: str | None = None,
+                 source: str = "<urdf>") -> None:
+        try:
+            self.model = pin.buildModelFromXML(urdf_text)
+        except Exception as exc:
+            raise URDFError(f"{source}: Pinocchio cannot build a model ({exc})") from exc
+        self.data = self.model.createData()
+        self.source = source
+        self.tip = tip
+        self._tip_id = self.frame_id(tip)
+        self.base = base
+        self._base_id = None if base is None else self.frame_id(base)
+        self.chain = self._chain_to(self._tip_id)
+        joints = [self.model.joints[j] for j in self.chain]
+        self.joint_names = [self.model.names[j] for j in self.chain]
+        self._idx_q = [jm.idx_q for jm in joints]
+        self._idx_v = [jm.idx_v for jm in joints]
+        self._continuous = [jm.nq == 2 for jm in joints]
+
+    @property
+    def dof(self) -> int:
+        return len(self.chain)
+
+    def frame_id(self, name: str) -> int:
+        """Pinocchio frame index of ``name``; URDFError listing the frames if it does not exist."""
+        if not self.model.existFrame(name):
+            names = sorted({f.name for f in self.model.frames})
+            raise URDFError(f"{self.source}: no frame named {name!r}; expected one of {names}")
+        return self.model.getFrameId(name)
+
+    def _chain_to(self, frame_id: int) -> list[int]:
+        joint = self.model.frames[frame_id].parentJoint
+        chain = []
+        while joint > 0:
+            if self.model.joints[joint].nv > 0:
+                chain.append(joint)
+            joint = self.model.parents[joint]
+        if self._base_id is not None:
+            base_joint = self.model.frames[self._base_id].parentJoint
+            ancestors = set()
+            j = base_joint
+            while j > 0:
+                ancestors.add(j)
+                j = self.model.parents[j]
+            chain = [j for j in chain if j not in ancestors]
+        return chain[::-1]
+
+    def configuration(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Chain-order joint vector (dof,) -> Pinocchio configuration (nq,)."""
+        values = np.asarray(q, dtype=float)
+        if values.shape != (self.dof,):
+            raise URDFError(f"{self.source}: expected {self.dof} joint values for the chain "
+                            f"{self.joint_names}, got shape {values.shape}")
+        config = pin.neutral(self.model)
+        for value, idx, continuous in zip(values, self._idx_q, self._continuous):
+            if continuous:
+                config[idx:idx + 2] = (np.cos(value), np.sin(value))
+            else:
+                config[idx] = value
+        return config
+
+    def _placement(self, frame_id: int) -> NDArray[np.float64]:
+        oMf = self.data.oMf[frame_id]
+        if self._base_id is None:
+            return oMf.homogeneous
+        return (self.data.oMf[self._base_id].inverse() * oMf).homogeneous
+
+    def fk(self, q: ArrayLike, frame: str | None = None) -> NDArray[np.float64]:
+        """Pose base -> ``frame`` (default: tip). q: (dof,) -> (4, 4); (N, dof) -> (N, 4, 4)."""
+        frame_id = self._tip_id if frame is None else self.frame_id(frame)
+        Q = np.asarray(q, dtype=float)
+        single = Q.ndim == 1
+        Q = np.atleast_2d(Q)
+        out = np.empty((Q.shape[0], 4, 4))
+        for k, row in enumerate(Q):
+            pin.framesForwardKinematics(self.model, self.data, self.configuration(row))
+            out[k] = self._placement(frame_id)
+        return out[0] if single else out
+
+    def jacobian(self, q: ArrayLike, frame: str | None = None,
+                 reference: ReferenceFrameName = "local_world_aligned") -> NDArray[np.float64]:
+        """6 x dof frame Jacobian [linear; angular], columns in chain order.
+
+        ``reference`` says in which frame the spatial velocity of ``frame`` is expressed:
+
+        * ``"local"``: in the frame itself, at its origin (body velocity);
+        * ``"world"``: in the world (root) frame, as the velocity of the point of the moving body
+          that coincides with the world origin (spatial velocity);
+        * ``"local_world_aligned"``: linear velocity of the frame's origin and angular velocity,
+          both along the world axes (what a Cartesian controller usually wants).
+        """
+        if reference not in REFERENCE_FRAMES:
+            raise URDFError(f"reference: expected one of {list(REFERENCE_FRAMES)}, "
+                            f"got {reference!r}")
+        frame_id = self._tip_id if frame is None else self.frame_id(frame)
+        config = self.configuration(np.asarray(q, dtype=float))
+        J = pin.computeFrameJacobian(self.model, self.data, config, frame_id,
+                                     REFERENCE_FRAMES[reference])
+        return J[:, self._idx_v]
+
+    def manipulability(self, q: ArrayLike, frame: str | None = None) -> Manipulability:
+        """Yoshikawa measures and singular values of the LOCAL_WORLD_ALIGNED Jacobian."""
+        J = self.jacobian(q, frame, "local_world_aligned")
+        sigma = np.linalg.svd(J, compute_uv=False)
+        sigma_min = float(sigma[-1]) if J.shape[1] >= 6 else 0.0
+        return Manipulability(
+            yoshikawa=_yoshikawa(J),
+            translational=_yoshikawa(J[:3]),
+            rotational=_yoshikawa(J[3:]),
+            singular_values=sigma,
+            sigma_min=sigma_min,
+            condition=float(sigma[0] / sigma_min) if sigma_min > 0 else float("inf"),
+        )
+
+
+def _yoshikawa(J: NDArray[np.float64]) -> float:
+    """sqrt(det(J J^T)) computed as the product of singular values (no squaring error)."""
+    sigma = np.linalg.svd(J, compute_uv=False)
+    if J.shape[0] > J.shape[1]:
+        return 0.0
+    return float(np.prod(sigma))

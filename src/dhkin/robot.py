@@ -1,0 +1,104 @@
+"""The user-facing robot: ``dhkin.load(name_or_path)`` and the :class:`Robot` it returns."""
+
+from __future__ import annotations
+
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dhkin.dh import DHTable, load_table
+from dhkin.errors import RobotNotFoundError
+from dhkin.reference import Reference
+from dhkin.urdf import GeneratedFiles, generate
+
+
+def builtin_dir() -> Path:
+    """Folder of the built-in robots: inside the installed package, or the repository's robots/."""
+    packaged = Path(__file__).resolve().parent / "robots"
+    if packaged.is_dir():
+        return packaged
+    return Path(__file__).resolve().parents[2] / "robots"
+
+
+def builtin_names() -> list[str]:
+    """Names of the built-in robots (the ``*.yaml`` tables in :func:`builtin_dir`)."""
+    return sorted(p.stem for p in builtin_dir().glob("*.yaml"))
+
+
+def resolve_table_path(name_or_path: str | Path) -> Path:
+    """A built-in robot name or a path to a ``.yaml`` table -> the table file's path."""
+    candidate = Path(name_or_path)
+    if candidate.suffix in (".yaml", ".yml") or candidate.exists():
+        if not candidate.is_file():
+            raise RobotNotFoundError(f"{candidate}: no such DH table file")
+        return candidate
+    builtin = builtin_dir() / f"{name_or_path}.yaml"
+    if builtin.is_file():
+        return builtin
+    raise RobotNotFoundError(f"{name_or_path!r} is neither a built-in robot nor a table file; "
+                             f"built-in robots: {builtin_names()}")
+
+
+def load(name_or_path: str | Path) -> Robot:
+    """Load a built-in robot by name (see ``dhkin robots``) or a DH table file by path."""
+    return Robot(load_table(resolve_table_path(name_or_path)))
+
+
+class Robot:
+    """A robot defined by a DH table: own FK, generated URDF, Pinocchio reference.
+
+    Frames: poses are base_link -> tool0 (4x4, metres); joint values q are URDF joint values
+    (rad for revolute joints, m for prismatic ones), ordered base to tip.
+    """
+
+    def __init__(self, table: DHTable) -> None:
+        self.table = table
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, {self.table.convention} DH, {self.dof} joints)"
+
+    @property
+    def name(self) -> str:
+        return self.table.name
+
+    @property
+    def dof(self) -> int:
+        return self.table.dof
+
+    @property
+    def lower(self) -> NDArray[np.float64]:
+        return self.table.lower
+
+    @property
+    def upper(self) -> NDArray[np.float64]:
+        return self.table.upper
+
+    def fk(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Own batched numpy FK, base_link -> tool0: (n,) -> (4, 4); (N, n) -> (N, 4, 4)."""
+        return self.table.fk(q)
+
+    def generated(self, prefix: str = "") -> GeneratedFiles:
+        """The macro xacro, top-level xacro and URDF (through xacro) of this robot."""
+        if prefix == "":
+            return self._generated_unprefixed
+        return generate(self.table, prefix=prefix)
+
+    @cached_property
+    def _generated_unprefixed(self) -> GeneratedFiles:
+        return generate(self.table)
+
+    def urdf(self, prefix: str = "") -> str:
+        """URDF text produced by running xacro on the generated macro (``prefix`` on all names)."""
+        return self.generated(prefix).urdf
+
+    def reference(self, tip: str = "tool0") -> Reference:
+        """Pinocchio model of the generated URDF, base_link -> ``tip``."""
+        if tip == "tool0":
+            return self._reference_tool0
+        return Reference(self.urdf(), tip=tip, source=f"{self.name}.urdf")
+
+    @cached_property
+    def _reference_tool0(self) -> Reference:
+        return Reference(self.urdf(), tip="tool0", source=f"{self.name}.urdf")

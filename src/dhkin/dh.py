@@ -9,7 +9,7 @@ Conventions (see DESIGN.md, "The DH table file"):
 * Revolute joint: ``theta_i = direction_i * q_i + offset_i``. Prismatic joint:
   ``d_i = direction_i * q_i + offset_i`` with ``theta_i`` fixed (key ``theta``).
 * ``T(q) = base @ A_1 ... A_n @ tool``: base_link -> DH frame 0 -> DH frame n -> tool0.
-* ``flange`` (optional): DH frame n -> the ``flange`` frame of the URDF; default rpy (0, -90, 0) deg,
+* ``flange`` (optional): DH frame n -> the URDF's ``flange`` frame; default rpy (0, -90, 0) deg,
   which puts the flange's x axis along the last joint axis (ROS-Industrial). Vendors differ in
   the flange's other axes (UR: rpy (0, -90, -90)), so a table may state it.
 
@@ -255,8 +255,8 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
               if "flange" in data else _default_flange())
     description = _text(data.get("description", ""), where, "description")
     source_text = _text(data.get("source", ""), where, "source")
-    return DHTable(name=name, convention=convention, joints=joints, base=base, tool=tool, flange=flange,
-                   description=description, source=source_text, path=path)
+    return DHTable(name=name, convention=convention, joints=joints, base=base, tool=tool,
+                   flange=flange, description=description, source=source_text, path=path)
 
 
 class _Where:
@@ -327,8 +327,8 @@ def _frame(value: Any, where: _Where, field_name: str, length_scale: float,
     if value is None:
         return np.eye(4)
     if not isinstance(value, Mapping):
-        raise DHError(where.msg(field_name, f"expected a mapping {{xyz: [x, y, z], rpy: [r, p, y]}},"
-                                            f" got {value!r}"))
+        raise DHError(where.msg(field_name, "expected a mapping {xyz: [x, y, z], rpy: [r, p, y]}, "
+                                            f"got {value!r}"))
     _check_keys(value, (), ("xyz", "rpy"), where, f"{field_name}.")
     xyz = np.array(_vector3(value.get("xyz", [0, 0, 0]), where, f"{field_name}.xyz"))
     rpy = np.array(_vector3(value.get("rpy", [0, 0, 0]), where, f"{field_name}.rpy"))
@@ -375,8 +375,8 @@ def _joint(entry: Any, index: int, where: _Where, length_scale: float,
     lower = num("lower") * variable_scale
     upper = num("upper") * variable_scale
     if not lower < upper:
-        raise DHError(where.msg(f"{label}.lower", f"expected lower < upper, got lower = "
-                                                  f"{entry['lower']!r}, upper = {entry['upper']!r}"))
+        raise DHError(where.msg(f"{label}.lower", "expected lower < upper, got lower = "
+                                f"{entry['lower']!r}, upper = {entry['upper']!r}"))
     velocity = num("velocity") * variable_scale
     effort = num("effort")
     for key, value in (("velocity", velocity), ("effort", effort)):

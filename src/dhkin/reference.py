@@ -105,7 +105,7 @@ class Reference:
             raise URDFError(f"{self.source}: expected {self.dof} joint values for the chain "
                             f"{self.joint_names}, got shape {values.shape}")
         config = pin.neutral(self.model)
-        for value, idx, continuous in zip(values, self._idx_q, self._continuous):
+        for value, idx, continuous in zip(values, self._idx_q, self._continuous, strict=True):
             if continuous:
                 config[idx:idx + 2] = (np.cos(value), np.sin(value))
             else:

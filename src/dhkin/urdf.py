@@ -123,7 +123,7 @@ def macro_xacro(table: DHTable) -> str:
     lines += [f'    <link name="{p}{j.link}"/>' for j in table.joints]
     lines += [f'    <link name="{p}{name}"/>' for name in ("base", "flange", "tool0")]
     parent = "base_link"
-    for joint, origin in zip(table.joints, origins):
+    for joint, origin in zip(table.joints, origins, strict=True):
         lines += [
             f"    {_row_comment(table, joint)}",
             f'    <joint name="{p}{joint.name}" type="{joint.type}">',

@@ -69,6 +69,9 @@ class Reference:
         self._idx_q = [jm.idx_q for jm in joints]
         self._idx_v = [jm.idx_v for jm in joints]
         self._continuous = [jm.nq == 2 for jm in joints]
+        # Fast path: the chain is the whole configuration, in order (true of generated URDFs).
+        self._direct = (self.model.nq == self.dof and self._idx_q == list(range(self.dof))
+                        and not any(self._continuous))
 
     @property
     def dof(self) -> int:
@@ -104,6 +107,8 @@ class Reference:
         if values.shape != (self.dof,):
             raise URDFError(f"{self.source}: expected {self.dof} joint values for the chain "
                             f"{self.joint_names}, got shape {values.shape}")
+        if self._direct:
+            return values
         config = pin.neutral(self.model)
         for value, idx, continuous in zip(values, self._idx_q, self._continuous, strict=True):
             if continuous:

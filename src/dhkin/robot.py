@@ -10,6 +10,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable, load_table
 from dhkin.errors import RobotNotFoundError
+from dhkin.ik.closed_form import DEFAULT_TOLERANCE, BranchSolver, solve_batch, solve_one
+from dhkin.ik.result import IKBatch, IKSolutions
 from dhkin.reference import Reference
 from dhkin.urdf import GeneratedFiles, generate
 
@@ -102,3 +104,31 @@ class Robot:
     @cached_property
     def _reference_tool0(self) -> Reference:
         return Reference(self.urdf(), tip="tool0", source=f"{self.name}.urdf")
+
+    @cached_property
+    def ik_solver(self) -> BranchSolver:
+        """The closed-form solver of this robot's family (FamilyError if none fits)."""
+        from dhkin.ik.family import solver_for
+
+        return solver_for(self.table)
+
+    def ik(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+           tolerance: float = DEFAULT_TOLERANCE) -> IKSolutions:
+        """Every solution for pose ``T`` (base_link -> tool0) within the joint limits.
+
+        Each solution is verified by FK to ``tolerance`` (m and rad). At a singularity the free
+        joint is taken from ``q_seed`` (default 0) and the solution is flagged.
+        """
+        return solve_one(self.ik_solver, self.table, T, q_seed, tolerance)
+
+    def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                 tolerance: float = DEFAULT_TOLERANCE) -> tuple[NDArray[np.float64],
+                                                                NDArray[np.bool_]]:
+        """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m)."""
+        batch = self.ik_batch_detailed(T, q_seed, tolerance)
+        return batch.q, batch.valid
+
+    def ik_batch_detailed(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                          tolerance: float = DEFAULT_TOLERANCE) -> IKBatch:
+        """Like :meth:`ik_batch`, with singularity flags and branch indices."""
+        return solve_batch(self.ik_solver, self.table, T, q_seed, tolerance)

@@ -1,0 +1,105 @@
+"""IK result types shared by every solver family.
+
+Joint values are URDF joint values (rad for revolute, m for prismatic), base to tip. Poses are
+base_link -> tool0 4x4 transforms in metres.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dhkin.errors import IKInputError
+
+#: Singularity flags, stored as bits so that batches keep them in one uint8 array.
+WRIST, ELBOW, SHOULDER = 1, 2, 4
+FLAG_NAMES: dict[int, str] = {WRIST: "wrist", ELBOW: "elbow", SHOULDER: "shoulder"}
+
+
+def flag_names(bits: int) -> frozenset[str]:
+    """Bit mask -> names among {"wrist", "elbow", "shoulder"}."""
+    return frozenset(name for bit, name in FLAG_NAMES.items() if int(bits) & bit)
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """Which branch a solution is on, and how many turns each joint has.
+
+    ``labels`` come from the solver family, e.g. ``{"shoulder": "righty", "elbow": "up",
+    "wrist": "noflip"}``. ``turns[k]`` is round(q_k / 2pi) for revolute joints (0 for prismatic):
+    the 2pi-shifted copies of one branch differ only in their turns.
+    """
+
+    labels: Mapping[str, str]
+    turns: tuple[int, ...]
+
+    def __str__(self) -> str:
+        parts = [f"{k}={v}" for k, v in self.labels.items()]
+        parts.append("turns=(" + ", ".join(f"{t:+d}" for t in self.turns) + ")")
+        return " ".join(parts)
+
+
+@dataclass(frozen=True)
+class IKSolutions:
+    """Every IK solution of one pose within the joint limits, each verified by FK.
+
+    ``q`` has shape (k, n); ``configurations[i]`` and ``flags[i]`` describe ``q[i]``. An empty
+    result carries the ``reason`` why. ``residuals`` are (position m, rotation rad) per solution.
+    ``numerical`` is True when the solutions come from the numerical solver.
+    """
+
+    q: NDArray[np.float64]
+    configurations: tuple[Configuration, ...] = ()
+    flags: tuple[frozenset[str], ...] = ()
+    residuals: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
+    reason: str = ""
+    family: str = ""
+    numerical: bool = False
+
+    def __len__(self) -> int:
+        return int(self.q.shape[0])
+
+    def __iter__(self) -> Iterator[NDArray[np.float64]]:
+        return iter(self.q)
+
+    def __bool__(self) -> bool:
+        return len(self) > 0
+
+    def nearest(self, q_now: ArrayLike) -> NDArray[np.float64]:
+        """The solution closest to ``q_now`` (Euclidean distance in joint space).
+
+        The 2pi-shifted copies are distinct solutions here, so the plain difference is the real
+        joint motion: a joint that may cross +-pi has a copy on the other side of the seam.
+        Raises IKInputError when there is no solution.
+        """
+        current = np.asarray(q_now, dtype=float)
+        if current.shape != (self.q.shape[1],):
+            raise IKInputError(f"q_now: expected shape ({self.q.shape[1]},), got {current.shape}")
+        if len(self) == 0:
+            raise IKInputError(f"no solution to choose from: {self.reason}")
+        return self.q[int(np.argmin(np.linalg.norm(self.q - current, axis=1)))].copy()
+
+    def __repr__(self) -> str:
+        if not self:
+            return f"IKSolutions(0 solutions: {self.reason})"
+        return f"IKSolutions({len(self)} solutions, family={self.family!r})"
+
+
+@dataclass(frozen=True)
+class IKBatch:
+    """IK of N poses: ``q`` (N, m, n), ``valid`` (N, m), ``flags`` (N, m) uint8 bits, ``branch``
+    (N, m) index into ``branch_labels`` (-1 where not valid). Rows are padded to the largest m."""
+
+    q: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    flags: NDArray[np.uint8]
+    branch: NDArray[np.int16]
+    branch_labels: tuple[Mapping[str, str], ...]
+    family: str
+
+    def counts(self) -> NDArray[np.int64]:
+        """Number of solutions of each pose, (N,)."""
+        return self.valid.sum(axis=1)

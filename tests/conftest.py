@@ -1,0 +1,34 @@
+"""Shared fixtures: robots and their oracle (Pinocchio on the URDF generated through xacro)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dhkin
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = REPO.parent / "shared"
+REFERENCE_URDFS = SHARED / "reference"
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def oracle_errors(robot: dhkin.Robot, q: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and rotation (rad) errors of Pinocchio FK(q) (M, n) against poses T (M, 4, 4)."""
+    from dhkin.transforms import pose_error
+
+    return pose_error(robot.reference().fk(q), T)
+
+
+@pytest.fixture(scope="session")
+def load_robot():
+    cache: dict[str, dhkin.Robot] = {}
+
+    def _load(name: str) -> dhkin.Robot:
+        if name not in cache:
+            cache[name] = dhkin.load(name)
+        return cache[name]
+
+    return _load

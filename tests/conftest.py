@@ -15,8 +15,9 @@ REFERENCE_URDFS = SHARED / "reference"
 DATA = Path(__file__).resolve().parent / "data"
 
 
-def oracle_errors(robot: dhkin.Robot, q: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Position (m) and rotation (rad) errors of Pinocchio FK(q) (M, n) against poses T (M, 4, 4)."""
+def oracle_errors(robot: dhkin.Robot, q: np.ndarray,
+                  T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and rotation (rad) errors of Pinocchio FK(q) (M, n) against poses (M, 4, 4)."""
     from dhkin.transforms import pose_error
 
     return pose_error(robot.reference().fk(q), T)

@@ -113,22 +113,24 @@ class Robot:
         return solver_for(self.table)
 
     def ik(self, T: ArrayLike, q_seed: ArrayLike | None = None,
-           tolerance: float = DEFAULT_TOLERANCE) -> IKSolutions:
+           tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None) -> IKSolutions:
         """Every solution for pose ``T`` (base_link -> tool0) within the joint limits.
 
         Each solution is verified by FK to ``tolerance`` (m and rad). At a singularity the free
-        joint is taken from ``q_seed`` (default 0) and the solution is flagged.
+        joint is taken from ``q_seed`` (default 0) and the solution is flagged. With ``tcp``
+        (tool0 -> TCP, 4x4) the target ``T`` is the pose of that TCP instead of tool0.
         """
-        return solve_one(self.ik_solver, self.table, T, q_seed, tolerance)
+        return solve_one(self.ik_solver, self.table, T, q_seed, tolerance, tcp)
 
     def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
-                 tolerance: float = DEFAULT_TOLERANCE) -> tuple[NDArray[np.float64],
-                                                                NDArray[np.bool_]]:
+                 tolerance: float = DEFAULT_TOLERANCE,
+                 tcp: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m)."""
-        batch = self.ik_batch_detailed(T, q_seed, tolerance)
+        batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp)
         return batch.q, batch.valid
 
     def ik_batch_detailed(self, T: ArrayLike, q_seed: ArrayLike | None = None,
-                          tolerance: float = DEFAULT_TOLERANCE) -> IKBatch:
+                          tolerance: float = DEFAULT_TOLERANCE,
+                          tcp: ArrayLike | None = None) -> IKBatch:
         """Like :meth:`ik_batch`, with singularity flags and branch indices."""
-        return solve_batch(self.ik_solver, self.table, T, q_seed, tolerance)
+        return solve_batch(self.ik_solver, self.table, T, q_seed, tolerance, tcp)

@@ -4,7 +4,8 @@ A family solver (spherical wrist, offset wrist, ...) solves for the *DH flange*:
 frame n in DH frame 0, one principal solution per branch. This module does the rest, the same way
 for every family:
 
-1. target conversion: ``T_dh = base^-1 @ T @ tool^-1`` (T is base_link -> tool0);
+1. target conversion: ``T_dh = base^-1 @ T @ tcp^-1 @ tool^-1`` (T is base_link -> TCP, where
+   ``tcp`` is tool0 -> TCP, identity by default: targets may be given for another tool frame);
 2. call the family's :meth:`BranchSolver.solve` -> :class:`Branches`;
 3. wrap revolute values to (-pi, pi], verify every branch by FK against ``T_dh`` (position and
    rotation tolerance, :data:`DEFAULT_TOLERANCE`) and drop any that is not exact;
@@ -104,8 +105,20 @@ def wrap_revolute(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.float64]
     return np.where(revolute, wrapped, q)
 
 
-def _dh_target(table: DHTable, T: NDArray[np.float64]) -> NDArray[np.float64]:
-    return invert(table.base) @ T @ invert(table.tool)
+def _dh_target(table: DHTable, T: NDArray[np.float64],
+               tcp: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    flange_to_target = table.tool if tcp is None else table.tool @ tcp
+    return invert(table.base) @ T @ invert(flange_to_target)
+
+
+def _as_tcp(tcp: ArrayLike | None) -> NDArray[np.float64] | None:
+    if tcp is None:
+        return None
+    frame = np.asarray(tcp, dtype=float)
+    if frame.shape != (4, 4) or not np.all(np.isfinite(frame)):
+        raise IKInputError(f"tcp: expected a finite (4, 4) transform tool0 -> TCP, "
+                           f"got shape {frame.shape}")
+    return frame
 
 
 def _dh_fk(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -166,12 +179,12 @@ def turns_of(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.int64]:
 
 
 def solve_batch(solver: BranchSolver, table: DHTable, T: ArrayLike, q_seed: ArrayLike | None = None,
-                tolerance: float = DEFAULT_TOLERANCE) -> IKBatch:
+                tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None) -> IKBatch:
     """Every solution of N poses within the limits, verified by FK; see the module docstring."""
     targets, _ = as_targets(T)
     n_poses, dof = targets.shape[0], table.dof
     seeds = as_seeds(q_seed, n_poses, dof)
-    T_dh = _dh_target(table, targets)
+    T_dh = _dh_target(table, targets, _as_tcp(tcp))
     branches = solver.solve(T_dh, seeds)
     n_branches = branches.q.shape[1]
 
@@ -204,17 +217,18 @@ def solve_batch(solver: BranchSolver, table: DHTable, T: ArrayLike, q_seed: Arra
 
 
 def solve_one(solver: BranchSolver, table: DHTable, T: ArrayLike, q_seed: ArrayLike | None = None,
-              tolerance: float = DEFAULT_TOLERANCE) -> IKSolutions:
+              tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None) -> IKSolutions:
     """Every solution of one pose (4, 4), with configurations, flags, residuals and a reason."""
     target = np.asarray(T, dtype=float)
     if target.shape != (4, 4):
         raise IKInputError(f"T: expected a (4, 4) pose, got shape {target.shape}")
     batch = solve_batch(solver, table, target[None], None if q_seed is None else
-                        np.asarray(q_seed, dtype=float)[None], tolerance)
+                        np.asarray(q_seed, dtype=float)[None], tolerance, tcp)
+    T_dh = _dh_target(table, target[None], _as_tcp(tcp))[0]
     keep = batch.valid[0]
     q = batch.q[0][keep]
     if q.shape[0] == 0:
-        reason = solver.explain(_dh_target(table, target[None])[0])
+        reason = solver.explain(T_dh)
         if not reason:
             reason = "no branch solution lies within the joint limits"
         return IKSolutions(q=np.zeros((0, table.dof)), reason=reason, family=solver.family)
@@ -223,7 +237,6 @@ def solve_one(solver: BranchSolver, table: DHTable, T: ArrayLike, q_seed: ArrayL
         Configuration(labels=dict(batch.branch_labels[b]), turns=tuple(int(t) for t in tr))
         for b, tr in zip(batch.branch[0][keep], turns, strict=True))
     flags = tuple(flag_names(f) for f in batch.flags[0][keep])
-    _, residuals = _exact(table, q, np.broadcast_to(_dh_target(table, target[None])[0],
-                                                    (q.shape[0], 4, 4)), tolerance)
+    _, residuals = _exact(table, q, np.broadcast_to(T_dh, (q.shape[0], 4, 4)), tolerance)
     return IKSolutions(q=q, configurations=configurations, flags=flags, residuals=residuals,
                        family=solver.family)

@@ -97,15 +97,23 @@ def _origin(T: NDArray[np.float64]) -> str:
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
-def _row_comment(table: DHTable, joint: Joint) -> str:
+def _row_comment(table: DHTable, index: int) -> str:
+    """Comment above joint ``index``: its DH row and how the URDF origin is made of the rows."""
+    joint = table.joints[index]
     parts = [f"a={_fmt(joint.a)} m", f"alpha={_fmt(math.degrees(joint.alpha))} deg"]
     if joint.is_revolute:
         parts += [f"d={_fmt(joint.d)} m", f"offset={_fmt(math.degrees(joint.offset))} deg"]
     else:
         parts += [f"theta={_fmt(math.degrees(joint.theta))} deg", f"offset={_fmt(joint.offset)} m"]
     parts.append(f"direction={joint.direction:+d}")
-    parts.append("limits in rad" if joint.is_revolute else "limits in m")
-    return f"<!-- {table.convention} DH row: " + ", ".join(parts) + " -->"
+    row = index + 1
+    if table.convention == "modified":
+        origin = f"origin = row {row} before its motion"
+    elif row == 1:
+        origin = "origin = base, then row 1 before its motion"
+    else:
+        origin = f"origin = the rest of row {row - 1}, then row {row} before its motion"
+    return f"<!-- {table.convention} DH row {row}: " + ", ".join(parts) + f"; {origin} -->"
 
 
 def macro_xacro(table: DHTable) -> str:
@@ -123,9 +131,9 @@ def macro_xacro(table: DHTable) -> str:
     lines += [f'    <link name="{p}{j.link}"/>' for j in table.joints]
     lines += [f'    <link name="{p}{name}"/>' for name in ("base", "flange", "tool0")]
     parent = "base_link"
-    for joint, origin in zip(table.joints, origins, strict=True):
+    for index, (joint, origin) in enumerate(zip(table.joints, origins, strict=True)):
         lines += [
-            f"    {_row_comment(table, joint)}",
+            f"    {_row_comment(table, index)}",
             f'    <joint name="{p}{joint.name}" type="{joint.type}">',
             f'      <parent link="{p}{parent}"/>',
             f'      <child link="{p}{joint.link}"/>',

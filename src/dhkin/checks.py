@@ -1,0 +1,139 @@
+"""The main job, `dhkin check`: for each built-in robot, regenerate, validate and cross-check.
+
+Per robot, in order: the committed xacro/URDF equal regeneration; the URDF passes check_urdf,
+Pinocchio and yourdfpy; own FK equals Pinocchio FK; the vendor URDF agrees where one exists; the
+closed-form IK (where a family fits) is exact and complete on random poses.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from dhkin.compare import compare_with_urdf
+from dhkin.errors import DhkinError, FamilyError
+from dhkin.ik_check import check_ik
+from dhkin.robot import Robot, builtin_dir
+from dhkin.urdf import generate
+from dhkin.validators import load_in_pinocchio, load_in_yourdfpy, run_check_urdf
+
+#: Vendor URDFs of ../shared/reference: robot -> (file, base frame, vendor tip, our tip).
+VENDOR_REFERENCES: dict[str, tuple[str, str, str, str]] = {
+    "abb_irb1200_7_70": ("abb_irb1200_7_70.urdf", "base_link", "tool0", "tool0"),
+    "aubo_i10": ("aubo_i10.urdf", "base_link", "wrist3_Link", "tool0"),
+    "ur3": ("ur3.urdf", "base_link", "tool0", "tool0"),
+    "ur5": ("ur5.urdf", "base_link", "tool0", "tool0"),
+    "ur10": ("ur10.urdf", "base_link", "tool0", "tool0"),
+}
+FK_SAMPLES = 1000
+FK_TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class CheckCell:
+    """One check of one robot: a short text for the table and whether it passed."""
+
+    ok: bool
+    text: str
+
+
+@dataclass(frozen=True)
+class CheckOptions:
+    reference_dir: Path | None
+    ik_poses: int = 10_000
+    seed: int = 0
+
+
+def check_generated(robot: Robot) -> CheckCell:
+    """The committed artefacts in the built-in folder equal what generation gives now."""
+    folder = builtin_dir()
+    stale = [name for name, text in generate(robot.table).as_dict().items()
+             if not (folder / name).is_file()
+             or (folder / name).read_text(encoding="utf-8") != text]
+    return CheckCell(not stale, "up to date" if not stale else "stale: " + ", ".join(stale))
+
+
+def check_validators(robot: Robot) -> CheckCell:
+    """check_urdf, Pinocchio and yourdfpy all accept the generated URDF."""
+    with tempfile.TemporaryDirectory(prefix="dhkin-check-") as tmp:
+        path = Path(tmp) / f"{robot.name}.urdf"
+        path.write_text(robot.urdf(), encoding="utf-8")
+        verdicts = [run_check_urdf(path), load_in_pinocchio(robot.urdf()), load_in_yourdfpy(path)]
+    failed = [f"{v.validator}: {v.detail}" for v in verdicts if not v.ok]
+    return CheckCell(not failed, "3/3 pass" if not failed else "; ".join(failed))
+
+
+def check_fk(robot: Robot, seed: int) -> CheckCell:
+    """Own numpy FK equals Pinocchio FK on the generated URDF (max |T_own - T_pin|)."""
+    q = robot.table.random_q(FK_SAMPLES, np.random.default_rng(seed))
+    deviation = float(np.abs(robot.fk(q) - robot.reference().fk(q)).max())
+    return CheckCell(deviation <= FK_TOLERANCE, f"{deviation:.1e}")
+
+
+def check_vendor(robot: Robot, reference_dir: Path | None) -> CheckCell | None:
+    """Max pose deviation from the vendor URDF, or None when the robot has no reference."""
+    if robot.name not in VENDOR_REFERENCES:
+        return None
+    file, base, tip, our_tip = VENDOR_REFERENCES[robot.name]
+    if reference_dir is None or not (reference_dir / file).is_file():
+        return CheckCell(False, f"missing {file}")
+    report = compare_with_urdf(robot, reference_dir / file, base_frame=base, tip=tip,
+                               robot_tip=our_tip)
+    return CheckCell(report.ok, f"{max(report.max_position, report.max_rotation):.1e}")
+
+
+def check_closed_form_ik(robot: Robot, poses: int, seed: int) -> CheckCell | None:
+    """Closed-form IK on random poses; None when no closed-form family fits the robot."""
+    try:
+        robot.ik_solver  # noqa: B018 - family detection only
+    except FamilyError:
+        return None
+    result = check_ik(robot, n=poses, seed=seed)
+    text = (f"{result.family}: {result.poses} poses, {result.solutions} sol, "
+            f"max {max(result.max_position, result.max_rotation):.1e}, "
+            f"complete {100 * result.completeness:.2f}%")
+    return CheckCell(result.ok(), text)
+
+
+COLUMNS: tuple[str, ...] = ("generated", "validators", "fk vs pin", "vendor", "closed-form ik")
+
+
+def check_robot(robot: Robot, options: CheckOptions) -> dict[str, CheckCell | None]:
+    """Run every check on one robot; a check that raises a dhkin error is a failed cell."""
+    runs: dict[str, Callable[[], CheckCell | None]] = {
+        "generated": lambda: check_generated(robot),
+        "validators": lambda: check_validators(robot),
+        "fk vs pin": lambda: check_fk(robot, options.seed),
+        "vendor": lambda: check_vendor(robot, options.reference_dir),
+        "closed-form ik": lambda: check_closed_form_ik(robot, options.ik_poses, options.seed),
+    }
+    cells: dict[str, CheckCell | None] = {}
+    for column, run in runs.items():
+        try:
+            cells[column] = run()
+        except DhkinError as exc:
+            cells[column] = CheckCell(False, f"error: {exc}")
+    return cells
+
+
+def format_table(rows: dict[str, dict[str, CheckCell | None]]) -> str:
+    """Plain-text summary: one row per robot, '-' where a check does not apply."""
+    header = ("robot", *COLUMNS, "result")
+    lines = []
+    for name, cells in rows.items():
+        texts = [c.text if c is not None else "-" for c in cells.values()]
+        passed = all(c.ok for c in cells.values() if c is not None)
+        lines.append((name, *texts, "PASS" if passed else "FAIL"))
+    widths = [max(len(str(r[k])) for r in [header, *lines]) for k in range(len(header))]
+    out = ["  ".join(str(h).ljust(w) for h, w in zip(header, widths, strict=True))]
+    out.append("  ".join("-" * w for w in widths))
+    out += ["  ".join(str(c).ljust(w) for c, w in zip(r, widths, strict=True)) for r in lines]
+    return "\n".join(out)
+
+
+def all_passed(rows: dict[str, dict[str, CheckCell | None]]) -> bool:
+    return all(c.ok for cells in rows.values() for c in cells.values() if c is not None)

@@ -1,0 +1,227 @@
+"""The `dhkin` command line. Exit status 0 means all is well; 1 a failed check; 2 bad input."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from dhkin.errors import DhkinError
+from dhkin.robot import Robot, builtin_dir, builtin_names, load
+from dhkin.transforms import matrix_to_rpy, xyz_rpy_to_matrix
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _robot_arg(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("robot", help="built-in robot name (see `dhkin robots`) or a table file")
+
+
+def _default_reference_dir() -> Path | None:
+    """../shared/reference next to the working directory or next to the source checkout."""
+    candidates = [Path.cwd().parent / "shared" / "reference",
+                  Path(__file__).resolve().parents[3] / "shared" / "reference"]
+    return next((c for c in candidates if c.is_dir()), None)
+
+
+def cmd_robots(args: argparse.Namespace) -> int:
+    from dhkin.errors import FamilyError
+
+    for name in builtin_names():
+        robot = load(name)
+        try:
+            family = robot.ik_solver.family
+        except FamilyError:
+            family = "no closed form"
+        print(f"{name:20s} {robot.dof} joints  {robot.table.convention:8s}  {family:16s} "
+              f"{robot.table.description}")
+    return EXIT_OK
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from dhkin.urdf import export
+
+    robot = load(args.robot)
+    for path in export(robot.table, args.output):
+        print(path)
+    return EXIT_OK
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    from dhkin.compare import compare_with_urdf
+
+    report = compare_with_urdf(load(args.robot), args.urdf, base_frame=args.base_frame,
+                               tip=args.tip, robot_tip=args.robot_tip, n=args.n, seed=args.seed,
+                               tolerance=args.tolerance)
+    print(report.summary())
+    if not report.ok:
+        print(f"worst joint vector (rad): {np.array2string(report.worst_q, precision=6)}")
+    return EXIT_OK if report.ok else EXIT_FAILED
+
+
+def _angles(values: Sequence[float], degrees: bool) -> np.ndarray:
+    array = np.asarray(values, dtype=float)
+    return np.radians(array) if degrees else array
+
+
+def _joint_values(robot: Robot, values: Sequence[float], degrees: bool) -> np.ndarray:
+    """Command-line joint values -> SI; --deg converts revolute joints only."""
+    q = np.asarray(values, dtype=float)
+    if q.shape != (robot.dof,):
+        raise DhkinError(f"q: {robot.name} has {robot.dof} joints, got {q.size} values")
+    revolute = np.array([j.is_revolute for j in robot.table.joints])
+    return np.where(revolute & degrees, np.radians(q), q)
+
+
+def _format_pose(T: np.ndarray, degrees: bool) -> str:
+    rpy = np.array(matrix_to_rpy(T))
+    unit = "deg" if degrees else "rad"
+    rpy_text = np.array2string(np.degrees(rpy) if degrees else rpy, precision=9)
+    return (np.array2string(T, precision=9, suppress_small=True)
+            + f"\nxyz (m): {np.array2string(T[:3, 3], precision=9)}\nrpy ({unit}): {rpy_text}")
+
+
+def cmd_fk(args: argparse.Namespace) -> int:
+    robot = load(args.robot)
+    q = _joint_values(robot, args.q, args.deg)
+    T = robot.fk(q) if args.frame == "tool0" else robot.reference().fk(q, args.frame)
+    print(f"base_link -> {args.frame}:")
+    print(_format_pose(T, args.deg))
+    return EXIT_OK
+
+
+def _target(args: argparse.Namespace) -> np.ndarray:
+    if args.matrix is not None:
+        try:
+            T = np.loadtxt(args.matrix, dtype=float)
+        except (OSError, ValueError) as exc:
+            raise DhkinError(f"{args.matrix}: expected a 4x4 matrix of numbers ({exc})") from exc
+        if T.shape != (4, 4):
+            raise DhkinError(f"{args.matrix}: expected a 4x4 matrix, got shape {T.shape}")
+        return T
+    if args.xyz is None:
+        raise DhkinError("ik: give the target as --xyz X Y Z [--rpy R P Y] or --matrix FILE")
+    rpy = _angles(args.rpy if args.rpy is not None else [0, 0, 0], args.deg)
+    return xyz_rpy_to_matrix(args.xyz, rpy)
+
+
+def cmd_ik(args: argparse.Namespace) -> int:
+    robot = load(args.robot)
+    T = _target(args)
+    seed = None if args.seed is None else _joint_values(robot, args.seed, args.deg)
+    solutions = robot.ik(T, q_seed=seed)
+    revolute = np.array([j.is_revolute for j in robot.table.joints])
+    shown = np.where(revolute & args.deg, np.degrees(solutions.q), solutions.q)
+    if args.json:
+        print(json.dumps({
+            "robot": robot.name, "family": solutions.family, "target": T.tolist(),
+            "units": "deg" if args.deg else "rad", "reason": solutions.reason,
+            "solutions": [
+                {"q": row.tolist(), "configuration": dict(c.labels), "turns": list(c.turns),
+                 "flags": sorted(f), "residual_m": float(r[0]), "residual_rad": float(r[1])}
+                for row, c, f, r in zip(shown, solutions.configurations, solutions.flags,
+                                        solutions.residuals, strict=True)],
+        }, indent=2))
+        return EXIT_OK if solutions else EXIT_FAILED
+    if not solutions:
+        print(f"no solution: {solutions.reason}")
+        return EXIT_FAILED
+    unit = "deg" if args.deg else "rad"
+    print(f"{len(solutions)} solutions ({solutions.family}, joint values in {unit}):")
+    for row, configuration, flags, residual in zip(shown, solutions.configurations,
+                                                   solutions.flags, solutions.residuals,
+                                                   strict=True):
+        flag_text = f" [{', '.join(sorted(flags))}]" if flags else ""
+        print(f"  {np.array2string(row, precision=6, floatmode='fixed')}  {configuration}"
+              f"{flag_text}  residual {max(residual):.1e}")
+    return EXIT_OK
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from dhkin.checks import CheckOptions, all_passed, check_robot, format_table
+
+    if not args.all and not args.robots:
+        raise DhkinError("check: name robots to check, or --all for every built-in robot")
+    names = builtin_names() if args.all else args.robots
+    reference_dir = Path(args.reference_dir) if args.reference_dir else _default_reference_dir()
+    options = CheckOptions(reference_dir=reference_dir, ik_poses=args.ik_poses, seed=args.seed)
+    print(f"built-in robots: {builtin_dir()}", file=sys.stderr)
+    print(f"vendor references: {reference_dir or 'not found'}", file=sys.stderr)
+    rows = {}
+    for k, name in enumerate(names, 1):
+        print(f"[{k}/{len(names)}] checking {name} ...", file=sys.stderr, flush=True)
+        rows[name] = check_robot(load(name), options)
+    print(format_table(rows))
+    passed = all_passed(rows)
+    print("all checks passed" if passed else "SOME CHECKS FAILED")
+    return EXIT_OK if passed else EXIT_FAILED
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="dhkin", description="Kinematics of serial arms from DH tables, checked against "
+                                  "Pinocchio. ROBOT is a built-in name or a path to a table.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("robots", help="list the built-in robots")
+    p.set_defaults(run=cmd_robots)
+
+    p = sub.add_parser("export", help="write <name>_macro.xacro, <name>.urdf.xacro, <name>.urdf")
+    _robot_arg(p)
+    p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
+    p.set_defaults(run=cmd_export)
+
+    p = sub.add_parser("compare", help="compare a robot with another URDF (e.g. the vendor's)")
+    _robot_arg(p)
+    p.add_argument("urdf", help="the other URDF file")
+    p.add_argument("--base-frame", default="base_link", help="base frame in the other URDF")
+    p.add_argument("--tip", default="tool0", help="tip frame in the other URDF")
+    p.add_argument("--robot-tip", default="tool0", help="tip frame of our URDF")
+    p.add_argument("-n", type=int, default=1000, help="joint vectors to sample (default 1000)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--tolerance", type=float, default=1e-9, help="m and rad (default 1e-9)")
+    p.set_defaults(run=cmd_compare)
+
+    p = sub.add_parser("fk", help="forward kinematics base_link -> tool0 (or --frame)")
+    _robot_arg(p)
+    p.add_argument("q", type=float, nargs="+", help="joint values (rad and m, or --deg)")
+    p.add_argument("--deg", action="store_true", help="revolute values and rpy in degrees")
+    p.add_argument("--frame", default="tool0", help="frame of the generated URDF")
+    p.set_defaults(run=cmd_fk)
+
+    p = sub.add_parser("ik", help="every closed-form IK solution of a pose")
+    _robot_arg(p)
+    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"), help="position (m)")
+    p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
+                   help="URDF roll-pitch-yaw of tool0 (rad, or --deg)")
+    p.add_argument("--matrix", help="file with the 4x4 pose base_link -> tool0")
+    p.add_argument("--seed", type=float, nargs="+", help="joint values for free joints")
+    p.add_argument("--deg", action="store_true", help="angles in and out in degrees")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(run=cmd_ik)
+
+    p = sub.add_parser("check", help="the main job: regenerate, validate, cross-check")
+    p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")
+    p.add_argument("--all", action="store_true", help="check every built-in robot")
+    p.add_argument("--reference-dir", help="folder of vendor URDFs (default ../shared/reference)")
+    p.add_argument("--ik-poses", type=int, default=10_000, help="IK poses per robot")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.set_defaults(run=cmd_check)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.run(args))
+    except DhkinError as exc:
+        print(f"dhkin: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())

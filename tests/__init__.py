@@ -1,0 +1,1 @@
+"""dhkin test suite (a package, so that tests can import shared helpers and broken IKs)."""

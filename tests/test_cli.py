@@ -1,0 +1,144 @@
+"""The `dhkin` command line: each subcommand's output and exit status."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dhkin
+from dhkin.cli import main
+from dhkin.validators import run_check_urdf
+
+from .conftest import REFERENCE_URDFS
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_console_script_is_installed() -> None:
+    """`dhkin --help` runs as a console script of the installed package."""
+    exe = Path(sys.executable).parent / "dhkin"
+    result = subprocess.run([str(exe), "--help"], capture_output=True, text=True, check=False)
+    assert result.returncode == 0
+    for command in ("robots", "export", "compare", "fk", "ik", "check"):
+        assert command in result.stdout
+
+
+def test_robots_lists_every_builtin(capsys) -> None:
+    code, out, _ = run(capsys, "robots")
+    assert code == 0
+    for name in dhkin.builtin_names():
+        assert name in out
+
+
+def test_export_writes_three_files_that_pass_check_urdf(capsys, tmp_path) -> None:
+    """Acceptance: `dhkin export ur5 -o out` writes the three files; check_urdf passes."""
+    code, _, _ = run(capsys, "export", "ur5", "-o", str(tmp_path / "out"))
+    assert code == 0
+    names = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert names == ["ur5.urdf", "ur5.urdf.xacro", "ur5_macro.xacro"]
+    verdict = run_check_urdf(tmp_path / "out" / "ur5.urdf")
+    assert verdict.ok, verdict.detail
+
+
+def test_export_of_a_table_file(capsys, tmp_path) -> None:
+    """A table given by path exports under its own name."""
+    table = Path(dhkin.__file__).resolve().parent
+    source = next(p for p in [table / "robots" / "planar_2r.yaml",
+                              table.parents[1] / "robots" / "planar_2r.yaml"] if p.is_file())
+    code, _, _ = run(capsys, "export", str(source), "-o", str(tmp_path))
+    assert code == 0
+    assert (tmp_path / "planar_2r.urdf").is_file()
+
+
+@pytest.mark.parametrize(("robot", "tip"), [("abb_irb1200_7_70", "tool0"), ("ur5", "tool0"),
+                                            ("aubo_i10", "wrist3_Link")])
+def test_compare_with_vendor_passes(capsys, robot: str, tip: str) -> None:
+    code, out, _ = run(capsys, "compare", robot, str(REFERENCE_URDFS / f"{robot}.urdf"),
+                       "--tip", tip, "-n", "200")
+    assert code == 0, out
+    assert out.startswith("OK:")
+
+
+def test_compare_with_the_wrong_vendor_fails(capsys) -> None:
+    """UR5 against the UR10 file: large deviation, exit status 1."""
+    code, out, _ = run(capsys, "compare", "ur5", str(REFERENCE_URDFS / "ur10.urdf"), "-n", "50")
+    assert code == 1
+    assert out.startswith("FAIL:")
+
+
+def test_compare_missing_frame_is_a_clear_error(capsys) -> None:
+    code, _, err = run(capsys, "compare", "aubo_i10", str(REFERENCE_URDFS / "aubo_i10.urdf"))
+    assert code == 2
+    assert "no frame named 'tool0'" in err and "aubo_i10.urdf" in err
+    assert "Traceback" not in err
+
+
+def test_fk_prints_the_pose(capsys) -> None:
+    """`dhkin fk` prints base_link -> tool0 equal to Pinocchio's."""
+    q = [0.1, -0.5, 0.7, 0.2, 0.3, -0.4]
+    code, out, _ = run(capsys, "fk", "ur5", *map(str, q))
+    assert code == 0
+    robot = dhkin.load("ur5")
+    expected = robot.reference().fk(np.array(q))[:3, 3]
+    xyz_line = next(line for line in out.splitlines() if line.startswith("xyz"))
+    printed = np.array(xyz_line.split("[")[1].split("]")[0].split(), dtype=float)
+    assert np.allclose(printed, expected, atol=1e-9)
+
+
+def test_fk_degrees(capsys) -> None:
+    code_deg, out_deg, _ = run(capsys, "fk", "abb_irb1200_7_70", "0", "90", "0", "0", "0", "0",
+                               "--deg")
+    code_rad, out_rad, _ = run(capsys, "fk", "abb_irb1200_7_70", "0", str(np.pi / 2), "0", "0",
+                               "0", "0")
+    assert code_deg == code_rad == 0
+    assert out_deg.splitlines()[1:5] == out_rad.splitlines()[1:5]
+
+
+def test_fk_wrong_number_of_values_is_an_error(capsys) -> None:
+    code, _, err = run(capsys, "fk", "ur5", "0", "0")
+    assert code == 2
+    assert "6 joints" in err
+
+
+def test_unknown_robot_is_an_error_listing_builtins(capsys) -> None:
+    code, _, err = run(capsys, "fk", "ur6", "0", "0", "0", "0", "0", "0")
+    assert code == 2
+    assert "ur6" in err and "ur5" in err
+
+
+def test_check_named_robot_passes(capsys) -> None:
+    """`dhkin check planar_2r` (no vendor, no closed form) prints a passing row."""
+    code, out, _ = run(capsys, "check", "planar_2r")
+    assert code == 0, out
+    assert "planar_2r" in out and "PASS" in out
+
+
+def test_check_needs_robots_or_all(capsys) -> None:
+    code, _, err = run(capsys, "check")
+    assert code == 2
+    assert "--all" in err
+
+
+def test_ik_json_round_trip(capsys) -> None:
+    """`dhkin ik --json` solutions reproduce the target on Pinocchio."""
+    robot = dhkin.load("ur5")
+    q = np.array([0.3, -1.1, 1.2, -0.4, 0.9, 0.2])
+    T = robot.reference().fk(q)
+    from dhkin.transforms import matrix_to_rpy
+    code, out, _ = run(capsys, "ik", "ur5", "--xyz", *map(str, T[:3, 3]),
+                       "--rpy", *map(str, matrix_to_rpy(T)), "--json")
+    assert code == 0
+    data = json.loads(out)
+    solutions = np.array([s["q"] for s in data["solutions"]])
+    assert solutions.shape[0] >= 8
+    poses = robot.reference().fk(solutions)
+    assert np.abs(poses - T).max() < 1e-9

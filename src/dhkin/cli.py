@@ -141,6 +141,42 @@ def cmd_ik(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_validate(args: argparse.Namespace) -> int:
+    from dhkin.validate import (
+        adapt,
+        load_ik,
+        own_ik,
+        replay,
+        tool_frame_from_robot,
+        validate,
+        write_failures,
+    )
+
+    robot = load(args.robot)
+    if args.ik is None:
+        ik, name = own_ik(robot), f"dhkin's own IK ({robot.ik_solver.family})"
+    else:
+        ik, name = load_ik(args.ik), args.ik
+        if args.deg or args.ik_frame:
+            tool = tool_frame_from_robot(robot, args.ik_frame) if args.ik_frame else None
+            ik = adapt(ik, degrees=args.deg, tool=tool)
+    if args.replay:
+        report = replay(robot, ik, args.replay, ik_name=name)
+    else:
+        report = validate(robot, ik, n=args.n, seed=args.seed, tolerance=args.tolerance,
+                          progress=sys.stderr.isatty(), ik_name=name)
+    print(report.summary())
+    if args.json:
+        Path(args.json).write_text(json.dumps(report.to_json(), indent=1), encoding="utf-8")
+    if args.report:
+        Path(args.report).write_text(report.markdown(), encoding="utf-8")
+    if report.failures:
+        path = write_failures(report, args.failures or f"{robot.name}_ik_failures.json")
+        print(f"failures written to {path} (rerun: dhkin validate {args.robot} --replay {path}"
+              f"{' --ik ' + args.ik if args.ik else ''})")
+    return EXIT_OK if report.ok else EXIT_FAILED
+
+
 def cmd_check(args: argparse.Namespace) -> int:
     from dhkin.checks import CheckOptions, all_passed, check_robot, format_table
 
@@ -203,6 +239,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--deg", action="store_true", help="angles in and out in degrees")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(run=cmd_ik)
+
+    p = sub.add_parser("validate", help="cross-validate an IK against Pinocchio")
+    _robot_arg(p)
+    p.add_argument("--ik", help="module:function of an IK, ik(T) -> joint vectors (default: ours)")
+    p.add_argument("-n", type=int, default=10_000, help="uniform samples (default 10000), plus "
+                                                         "n/10 special and n/10 near-singular")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--tolerance", type=float, default=1e-9, help="m and rad (default 1e-9)")
+    p.add_argument("--deg", action="store_true", help="the IK returns degrees")
+    p.add_argument("--ik-frame", help="the IK solves for this frame of our URDF, not tool0")
+    p.add_argument("--json", help="write the report as JSON to this file")
+    p.add_argument("--report", help="write the report as Markdown to this file")
+    p.add_argument("--failures", help="failure file (default <robot>_ik_failures.json)")
+    p.add_argument("--replay", help="rerun the samples of a failure file")
+    p.set_defaults(run=cmd_validate)
 
     p = sub.add_parser("check", help="the main job: regenerate, validate, cross-check")
     p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")

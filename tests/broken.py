@@ -1,0 +1,56 @@
+"""Deliberately broken IKs, each wrong in one way a real IK goes wrong, for `dhkin validate`.
+
+Use them as ``dhkin validate ur5 --ik tests.broken:sign_flip`` (from the repository root). Each
+takes the target T (base_link -> tool0) and the robot under test, and returns joint vectors in
+radians, as the validation contract says.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from functools import cache
+
+import numpy as np
+from numpy.typing import NDArray
+
+import dhkin
+from dhkin.robot import Robot
+
+#: |sin q5| under which a solution counts as on the wrist singularity here.
+WRIST_SINGULAR = 1e-6
+
+
+@cache
+def _robot_with_flipped_d4(name: str) -> Robot:
+    """The named built-in robot with the sign of d4 (the row of joint 4) flipped."""
+    table = dhkin.load(name).table
+    joints = list(table.joints)
+    joints[3] = dataclasses.replace(joints[3], d=-joints[3].d)
+    return Robot(dataclasses.replace(table, joints=tuple(joints)))
+
+
+def sign_flip(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
+    """Solves a table whose d4 has the wrong sign: its answers miss the real pose."""
+    return _robot_with_flipped_d4(robot.name).ik(T).q
+
+
+def dropped_branch(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
+    """Correct solutions, except that one branch (the solver's first) is never returned."""
+    solutions = robot.ik(T)
+    first = dict(robot.ik_solver.branch_labels[0])
+    keep = [k for k, c in enumerate(solutions.configurations) if dict(c.labels) != first]
+    return solutions.q[keep]
+
+
+def wrong_wrist_split(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
+    """At q5 = 0, moves q4 and q6 the same way (only a split keeping the pose is right)."""
+    q = robot.ik(T).q.copy()
+    singular = np.abs(np.sin(q[:, 4])) < WRIST_SINGULAR
+    q[singular, 3] += 0.1
+    q[singular, 5] += 0.1
+    return q
+
+
+def degrees_as_radians(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
+    """Correct solutions, returned in degrees where radians are expected."""
+    return np.degrees(robot.ik(T).q)

@@ -216,7 +216,10 @@ def load_table(path: str | Path) -> DHTable:
     except OSError as exc:
         raise DHError(f"{file}: cannot read DH table file ({exc.strerror})") from exc
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_UniqueKeyLoader)  # SafeLoader that rejects duplicates
+    except _DuplicateKeyError as exc:
+        raise DHError(f"{file}: {exc.key}: given twice in one mapping (lines {exc.first_line} "
+                      f"and {exc.line}); expected each key once") from exc
     except yaml.YAMLError as exc:
         raise DHError(f"{file}: not valid YAML ({exc})") from exc
     return parse_table(data, source=str(file), path=file)
@@ -257,6 +260,37 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
     source_text = _text(data.get("source", ""), where, "source")
     return DHTable(name=name, convention=convention, joints=joints, base=base, tool=tool,
                    flange=flange, description=description, source=source_text, path=path)
+
+
+class _DuplicateKeyError(yaml.YAMLError):
+    """A key that appears twice in one YAML mapping (PyYAML would silently keep the last)."""
+
+    def __init__(self, key: Any, first_line: int, line: int) -> None:
+        super().__init__(f"duplicate key {key!r}")
+        self.key, self.first_line, self.line = key, first_line, line
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """yaml.SafeLoader that rejects duplicate keys instead of keeping the last value."""
+
+
+def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode,
+                              deep: bool = False) -> dict[Any, Any]:
+    first_lines: dict[Any, int] = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        line = key_node.start_mark.line + 1
+        try:
+            if key in first_lines:
+                raise _DuplicateKeyError(key, first_lines[key], line)
+            first_lines[key] = line
+        except TypeError:  # unhashable key (a list or mapping): PyYAML reports it below
+            continue
+    return loader.construct_mapping(node, deep=deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
+                                 _construct_unique_mapping)
 
 
 class _Where:
@@ -381,7 +415,7 @@ def _joint(entry: Any, index: int, where: _Where, length_scale: float,
     effort = num("effort")
     for key, value in (("velocity", velocity), ("effort", effort)):
         if value < 0:
-            raise DHError(where.msg(f"{label}.{key}", f"expected a value >= 0, got {value!r}"))
+            raise DHError(where.msg(f"{label}.{key}", f"expected a value >= 0, got {entry[key]!r}"))
     return Joint(
         name=name, link=link, type=joint_type,
         a=num("a") * length_scale, alpha=num("alpha") * angle_scale,

@@ -146,6 +146,9 @@ class Reference:
           that coincides with the world origin (spatial velocity);
         * ``"local_world_aligned"``: linear velocity of the frame's origin and angular velocity,
           both along the world axes (what a Cartesian controller usually wants).
+
+        The "world" is the ``base`` frame when one was given (the frame :meth:`fk` poses are
+        relative to), else the root link.
         """
         if reference not in REFERENCE_FRAMES:
             raise URDFError(f"reference: expected one of {list(REFERENCE_FRAMES)}, "
@@ -153,8 +156,15 @@ class Reference:
         frame_id = self._tip_id if frame is None else self.frame_id(frame)
         config = self.configuration(np.asarray(q, dtype=float))
         J = pin.computeFrameJacobian(self.model, self.data, config, frame_id,
-                                     REFERENCE_FRAMES[reference])
-        return J[:, self._idx_v]
+                                     REFERENCE_FRAMES[reference])[:, self._idx_v]
+        if self._base_id is None or reference == "local":
+            return J
+        # Pinocchio's world is the root link: re-express in the base frame, like fk's poses.
+        oMb = pin.updateFramePlacement(self.model, self.data, self._base_id)
+        if reference == "world":
+            return oMb.inverse().action @ J
+        R_T = oMb.rotation.T
+        return np.vstack([R_T @ J[:3], R_T @ J[3:]])
 
     def manipulability(self, q: ArrayLike, frame: str | None = None) -> Manipulability:
         """Yoshikawa measures and singular values of the LOCAL_WORLD_ALIGNED Jacobian."""

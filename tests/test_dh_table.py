@@ -38,6 +38,8 @@ BAD_CASES: list[tuple[str, str, str]] = [
     # wrong units
     ("unit_length_cm", "units.length", "expected one of ['m', 'mm'], got 'cm'"),
     ("unit_angle_degree", "units.angle", "expected one of ['rad', 'deg'], got 'degree'"),
+    ("degrees_in_rad_table", "joints[0].alpha", "expected an angle within +-360 deg (+-2pi rad), "
+     "got 90 rad; are units.angle right?"),
     ("units_not_mapping", "units", "expected a mapping {length: m|mm, angle: deg|rad}, got 'mm'"),
     # lower > upper (and an empty range)
     ("lower_above_upper", "joints[0].lower",

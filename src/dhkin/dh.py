@@ -416,6 +416,12 @@ def _joint(entry: Any, index: int, where: _Where, length_scale: float,
     for key, value in (("velocity", velocity), ("effort", effort)):
         if value < 0:
             raise DHError(where.msg(f"{label}.{key}", f"expected a value >= 0, got {entry[key]!r}"))
+    for key in ("alpha", "offset" if revolute else "theta"):
+        if abs(num(key) * angle_scale) > 2 * math.pi + 1e-9:
+            unit = "deg" if angle_scale != 1.0 else "rad"
+            raise DHError(where.msg(f"{label}.{key}", f"expected an angle within +-360 deg "
+                                    f"(+-2pi rad), got {entry[key]!r} {unit}; are units.angle "
+                                    f"right?"))
     return Joint(
         name=name, link=link, type=joint_type,
         a=num("a") * length_scale, alpha=num("alpha") * angle_scale,

@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from dhkin.errors import DhkinError
+from dhkin.maps import add_map_arguments, cli_map
 from dhkin.robot import Robot, builtin_dir, builtin_names, load
+from dhkin.singularity import add_singularity_arguments, cli_singularity
 from dhkin.transforms import matrix_to_rpy, xyz_rpy_to_matrix
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
@@ -254,6 +256,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--failures", help="failure file (default <robot>_ik_failures.json)")
     p.add_argument("--replay", help="rerun the samples of a failure file")
     p.set_defaults(run=cmd_validate)
+
+    p = sub.add_parser("singularity", help="singularity classes, factored det J and Pinocchio's "
+                                           "manipulability of a configuration")
+    add_singularity_arguments(p)
+    p.set_defaults(run=cli_singularity)
+
+    p = sub.add_parser("map", help="manipulability maps with singular loci (PNG)")
+    add_map_arguments(p)
+    p.set_defaults(run=cli_map)
 
     p = sub.add_parser("check", help="the main job: regenerate, validate, cross-check")
     p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")

@@ -2,18 +2,23 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from functools import cached_property
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable, load_table
-from dhkin.errors import RobotNotFoundError
+from dhkin.errors import FamilyError, RobotNotFoundError
 from dhkin.ik.closed_form import DEFAULT_TOLERANCE, BranchSolver, solve_batch, solve_one
 from dhkin.ik.result import IKBatch, IKSolutions
 from dhkin.reference import Reference
 from dhkin.urdf import GeneratedFiles, generate
+
+if TYPE_CHECKING:
+    from dhkin.singularity import SingularityReport, Thresholds
 
 
 def builtin_dir() -> Path:
@@ -112,6 +117,20 @@ class Robot:
 
         return solver_for(self.table)
 
+    @cached_property
+    def _closed_form_solver(self) -> BranchSolver | None:
+        """The closed-form solver of this robot's family, or None when no family fits (cached:
+        a cached_property does not cache the FamilyError of :attr:`ik_solver`)."""
+        try:
+            return self.ik_solver
+        except FamilyError:
+            return None
+
+    @property
+    def has_closed_form(self) -> bool:
+        """Whether a closed-form IK family fits this robot's table."""
+        return self._closed_form_solver is not None
+
     def ik(self, T: ArrayLike, q_seed: ArrayLike | None = None,
            tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None) -> IKSolutions:
         """Every solution for pose ``T`` (base_link -> tool0) within the joint limits.
@@ -119,13 +138,26 @@ class Robot:
         Each solution is verified by FK to ``tolerance`` (m and rad). At a singularity the free
         joint is taken from ``q_seed`` (default 0) and the solution is flagged. With ``tcp``
         (tool0 -> TCP, 4x4) the target ``T`` is the pose of that TCP instead of tool0.
+
+        When no closed-form family fits, the numerical solver answers (``result.numerical`` is
+        True, family "numerical"): the solution from the seed's basin first, not necessarily
+        every solution.
         """
-        return solve_one(self.ik_solver, self.table, T, q_seed, tolerance, tcp)
+        solver = self._closed_form_solver
+        if solver is None:
+            from dhkin.ik.numerical import solver_for_robot
+
+            return solver_for_robot(self).solve(T, q_seed, tolerance=tolerance, tcp=tcp)
+        return solve_one(solver, self.table, T, q_seed, tolerance, tcp)
 
     def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                  tolerance: float = DEFAULT_TOLERANCE,
                  tcp: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m)."""
+        if self._closed_form_solver is None:
+            from dhkin.ik.numerical import solver_for_robot
+
+            return solver_for_robot(self).solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)
         batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp)
         return batch.q, batch.valid
 
@@ -134,3 +166,19 @@ class Robot:
                           tcp: ArrayLike | None = None) -> IKBatch:
         """Like :meth:`ik_batch`, with singularity flags and branch indices."""
         return solve_batch(self.ik_solver, self.table, T, q_seed, tolerance, tcp)
+
+    def singularity(self, q: ArrayLike,
+                    thresholds: Thresholds | Mapping[str, float] | None = None
+                    ) -> SingularityReport:
+        """Singularity report of q (URDF joint values, rad and m).
+
+        ``kinds``: the singularities q is at or near (subset of "wrist", "elbow", "shoulder");
+        ``distances`` (|sin q5|, metres); the analytic det J factored into shoulder x elbow x
+        wrist terms; Pinocchio's ``sigma_min``, singular values, Yoshikawa measures and
+        condition. ``thresholds`` default to dhkin.singularity.DEFAULT_THRESHOLDS, or override
+        some kinds: {"wrist": 1e-3}. SingularityError outside the closed-form families. See
+        docs/singularities.md.
+        """
+        from dhkin.singularity import singularity_report
+
+        return singularity_report(self, q, thresholds)

@@ -28,7 +28,8 @@ def test_console_script_is_installed() -> None:
     exe = Path(sys.executable).parent / "dhkin"
     result = subprocess.run([str(exe), "--help"], capture_output=True, text=True, check=False)
     assert result.returncode == 0
-    for command in ("robots", "export", "compare", "fk", "ik", "check"):
+    for command in ("robots", "export", "compare", "fk", "ik", "validate", "singularity", "map",
+                    "check"):
         assert command in result.stdout
 
 
@@ -142,3 +143,27 @@ def test_ik_json_round_trip(capsys) -> None:
     assert solutions.shape[0] >= 8
     poses = robot.reference().fk(solutions)
     assert np.abs(poses - T).max() < 1e-9
+
+
+@pytest.mark.parametrize("command", ["robots", "export", "compare", "fk", "ik", "validate",
+                                     "singularity", "map", "check"])
+def test_every_subcommand_has_help(capsys, command: str) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main([command, "--help"])
+    assert exit_info.value.code == 0
+    assert "usage: dhkin " + command in capsys.readouterr().out
+
+
+def test_singularity_prints_the_report(capsys) -> None:
+    """At q5 = 0 the IRB 1200 report names the wrist singularity."""
+    code, out, _ = run(capsys, "singularity", "abb_irb1200_7_70", "0", "30", "-20", "0", "0", "0",
+                       "--deg")
+    assert code == 0
+    assert "wrist" in out
+
+
+def test_map_writes_a_png(capsys, tmp_path) -> None:
+    path = tmp_path / "planar.png"
+    code, _, _ = run(capsys, "map", "abb_irb1200_7_70", "-o", str(path), "--resolution", "12")
+    assert code == 0
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -122,11 +122,31 @@ def _as_tcp(tcp: ArrayLike | None) -> NDArray[np.float64] | None:
 
 
 def _dh_fk(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """DH frame 0 -> DH frame n for q (M, n)."""
-    A = table.link_transforms(q)
-    T = A[:, 0]
-    for i in range(1, table.dof):
-        T = T @ A[:, i]
+    """DH frame 0 -> DH frame n for q (M, n).
+
+    The product of ``table.link_transforms(q)``, evaluated factor by factor on the rotation's
+    columns x, y, z and the origin p with elementwise operations instead of (M, 4, 4) matrix
+    products: this check runs on every 2pi copy (up to 512 per pose on a +-360 deg arm).
+    """
+    theta, d = table.dh_parameters(q)
+    cos_theta, sin_theta = np.cos(theta), np.sin(theta)
+    x, y, z = (np.broadcast_to(np.eye(3)[k], (q.shape[0], 3)) for k in range(3))
+    p = np.zeros((q.shape[0], 3))
+    for i, joint in enumerate(table.joints):
+        c, s = cos_theta[:, i, None], sin_theta[:, i, None]
+        ca, sa = np.cos(joint.alpha), np.sin(joint.alpha)
+        if table.convention == "standard":  # Rz(theta) Tz(d) Tx(a) Rx(alpha)
+            x, y = c * x + s * y, c * y - s * x
+            p = p + d[:, i, None] * z + joint.a * x
+            y, z = ca * y + sa * z, ca * z - sa * y
+        else:  # modified: Rx(alpha) Tx(a) Rz(theta) Tz(d)
+            y, z = ca * y + sa * z, ca * z - sa * y
+            p = p + joint.a * x
+            x, y = c * x + s * y, c * y - s * x
+            p = p + d[:, i, None] * z
+    T = np.zeros((q.shape[0], 4, 4))
+    T[:, :3, 0], T[:, :3, 1], T[:, :3, 2], T[:, :3, 3] = x, y, z, p
+    T[:, 3, 3] = 1.0
     return T
 
 

@@ -10,6 +10,7 @@ with zero wrong and zero unsolved required.
 
 from __future__ import annotations
 
+import sys
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -94,7 +95,7 @@ def check_ik(robot: Robot, poses: int, seed: int) -> CheckCell:
     from dhkin.validate import validate
 
     n = poses if robot.has_closed_form else min(poses, NUMERICAL_POSES)
-    report = validate(robot, n=n, seed=seed)
+    report = validate(robot, n=n, seed=seed, progress=sys.stderr.isatty())
     family = robot.ik_solver.family if robot.has_closed_form else "numerical"
     residual = max(report.residuals.get("position_max", 0.0),
                    report.residuals.get("rotation_max", 0.0))

@@ -117,22 +117,25 @@ class Reference:
                 config[idx] = value
         return config
 
-    def _placement(self, frame_id: int) -> NDArray[np.float64]:
-        oMf = self.data.oMf[frame_id]
-        if self._base_id is None:
-            return oMf.homogeneous
-        return (self.data.oMf[self._base_id].inverse() * oMf).homogeneous
-
     def fk(self, q: ArrayLike, frame: str | None = None) -> NDArray[np.float64]:
         """Pose base -> ``frame`` (default: tip). q: (dof,) -> (4, 4); (N, dof) -> (N, 4, 4)."""
         frame_id = self._tip_id if frame is None else self.frame_id(frame)
         Q = np.asarray(q, dtype=float)
         single = Q.ndim == 1
         Q = np.atleast_2d(Q)
+        if Q.ndim != 2 or Q.shape[1] != self.dof:
+            raise URDFError(f"{self.source}: expected {self.dof} joint values for the chain "
+                            f"{self.joint_names}, got shape {np.shape(q)}")
         out = np.empty((Q.shape[0], 4, 4))
+        model, data = self.model, self.data
         for k, row in enumerate(Q):
-            pin.framesForwardKinematics(self.model, self.data, self.configuration(row))
-            out[k] = self._placement(frame_id)
+            # Joint placements, then only the frames asked for (not every frame of the model).
+            pin.forwardKinematics(model, data, row if self._direct else self.configuration(row))
+            placement = pin.updateFramePlacement(model, data, frame_id)
+            if self._base_id is not None:
+                base = pin.updateFramePlacement(model, data, self._base_id)
+                placement = base.inverse() * placement
+            out[k] = placement.homogeneous
         return out[0] if single else out
 
     def jacobian(self, q: ArrayLike, frame: str | None = None,

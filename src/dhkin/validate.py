@@ -279,7 +279,10 @@ def _call(ik: IKCallable, robot: Robot, T: NDArray[np.float64],
         kwargs["q_seed"] = q_sampled
     if "robot" in parameters:
         kwargs["robot"] = robot
-    return [np.asarray(q, dtype=float).reshape(-1) for q in ik(T, **kwargs)]
+    result = ik(T, **kwargs)
+    if isinstance(result, np.ndarray) and result.ndim == 2:
+        return list(result.astype(float, copy=False))
+    return [np.asarray(q, dtype=float).reshape(-1) for q in result]
 
 
 # --------------------------------------------------------------------------------------------
@@ -317,38 +320,47 @@ def _compared_joints(robot: Robot, q_sampled: NDArray[np.float64],
     return np.arange(robot.dof)
 
 
-def _check_sample(robot: Robot, index: int, sample_set: str, q_sampled: NDArray[np.float64],
-                  T: NDArray[np.float64], returned: list[NDArray[np.float64]],
-                  tolerance: float, joint_tolerance: float, seeded: bool) -> SampleResult:
+@dataclass(frozen=True)
+class _Checked:
+    """Outcome of one sample before it is turned into a (JSON-ready) SampleResult."""
+
+    outcome: str
+    detail: str
+    position: NDArray[np.float64]
+    rotation: NDArray[np.float64]
+
+
+def _check_sample(robot: Robot, q_sampled: NDArray[np.float64], T: NDArray[np.float64],
+                  returned: list[NDArray[np.float64]], tolerance: float, joint_tolerance: float,
+                  seeded: bool) -> _Checked:
     dof = robot.dof
-    bad_shape = [s for s in returned if s.shape != (dof,) or not np.all(np.isfinite(s))]
-    good = [s for s in returned if s.shape == (dof,) and np.all(np.isfinite(s))]
+    if all(s.shape == (dof,) for s in returned):
+        stacked = np.array(returned).reshape(len(returned), dof)
+        Q = stacked[np.isfinite(stacked).all(axis=1)]
+    else:
+        Q = np.array([s for s in returned if s.shape == (dof,) and np.all(np.isfinite(s))])
     position: NDArray[np.float64] = np.zeros(0)
     rotation: NDArray[np.float64] = np.zeros(0)
-    outcome, detail = "success", ""
-    if good:
-        Q = np.array(good)
+    if len(Q):
         position, rotation = pose_error(robot.reference().fk(Q), np.broadcast_to(T, (len(Q), 4, 4)))
-    if bad_shape:
-        outcome, detail = "wrong", f"{len(bad_shape)} solution(s) not finite or not {dof} values"
-    elif good and not np.all(robot.table.in_limits(np.array(good))):
-        outcome, detail = "wrong", "a solution lies outside the joint limits"
-    elif good and (position.max() > tolerance or rotation.max() > tolerance):
-        outcome = "wrong"
-        detail = f"residual {position.max():.2e} m / {rotation.max():.2e} rad"
-    elif not returned:
-        outcome, detail = "no_solution", "nothing returned for a reachable target"
-    else:
-        difference = wrap_revolute(robot.table, np.array(good) - q_sampled)
-        difference = difference[:, _compared_joints(robot, q_sampled, seeded)]
-        if np.abs(difference).max(axis=1).min() > joint_tolerance:
-            outcome = "missing"
-            detail = (f"closest returned solution differs by "
-                      f"{np.abs(difference).max(axis=1).min():.2e} (mod 2pi)")
-    return SampleResult(
-        index=index, sample_set=sample_set, q_sampled=q_sampled.tolist(), target=T.tolist(),
-        returned=[s.tolist() for s in returned], position_errors=position.tolist(),
-        rotation_errors=rotation.tolist(), outcome=outcome, detail=detail)
+    if len(Q) < len(returned):
+        bad = len(returned) - len(Q)
+        return _Checked("wrong", f"{bad} solution(s) not finite or not {dof} values", position,
+                        rotation)
+    if not returned:
+        return _Checked("no_solution", "nothing returned for a reachable target", position,
+                        rotation)
+    if not np.all(robot.table.in_limits(Q)):
+        return _Checked("wrong", "a solution lies outside the joint limits", position, rotation)
+    if position.max() > tolerance or rotation.max() > tolerance:
+        return _Checked("wrong", f"residual {position.max():.2e} m / {rotation.max():.2e} rad",
+                        position, rotation)
+    difference = wrap_revolute(robot.table, Q - q_sampled)
+    closest = np.abs(difference[:, _compared_joints(robot, q_sampled, seeded)]).max(axis=1).min()
+    if closest > joint_tolerance:
+        return _Checked("missing", f"closest returned solution differs by {closest:.2e} "
+                                   "(mod 2pi)", position, rotation)
+    return _Checked("success", "", position, rotation)
 
 
 def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> Iterable[Any]:
@@ -397,32 +409,32 @@ def _run(robot: Robot, ik: IKCallable, q: NDArray[np.float64], sets: list[str], 
             returned, error = [], f"raised {type(exc).__name__}: {exc}"
         else:
             error = ""
-        result = _check_sample(robot, k, sets[k], q[k], targets[k], returned, tolerance,
-                               joint_tolerance, seeded)
-        if error and result.outcome == "no_solution":
-            result = SampleResult(**{**asdict(result), "detail": error})
+        checked = _check_sample(robot, q[k], targets[k], returned, tolerance, joint_tolerance,
+                                seeded)
+        counts[checked.outcome] += 1
+        by_set.setdefault(sets[k], Counter())[checked.outcome] += 1
         if labels[k]:
-            result = SampleResult(**{**asdict(result), "configuration": labels[k]})
-        counts[result.outcome] += 1
-        by_set.setdefault(sets[k], Counter())[result.outcome] += 1
-        if labels[k]:
-            by_configuration.setdefault(labels[k], Counter())[result.outcome] += 1
-        all_position += result.position_errors
-        all_rotation += result.rotation_errors
+            by_configuration.setdefault(labels[k], Counter())[checked.outcome] += 1
+        all_position.append(checked.position)
+        all_rotation.append(checked.rotation)
         n_solutions.append(len(returned))
-        if result.outcome != "success":
-            report.failures.append(result)
+        if checked.outcome != "success":
+            report.failures.append(SampleResult(
+                index=k, sample_set=sets[k], q_sampled=q[k].tolist(), target=targets[k].tolist(),
+                returned=[r.tolist() for r in returned],
+                position_errors=checked.position.tolist(),
+                rotation_errors=checked.rotation.tolist(), outcome=checked.outcome,
+                detail=error or checked.detail, configuration=labels[k]))
     report.counts = {o: counts.get(o, 0) for o in OUTCOMES}
     report.by_set = {s: dict(c) for s, c in by_set.items()}
     report.by_configuration = {s: dict(c) for s, c in sorted(by_configuration.items())}
     report.solution_counts = {"min": float(min(n_solutions)), "max": float(max(n_solutions)),
                               "median": float(np.median(n_solutions))}
-    if all_position:
+    position, rotation = np.concatenate(all_position), np.concatenate(all_rotation)
+    if position.size:
         report.residuals = {
-            "position_max": float(np.max(all_position)),
-            "position_median": float(np.median(all_position)),
-            "rotation_max": float(np.max(all_rotation)),
-            "rotation_median": float(np.median(all_rotation)),
+            "position_max": float(position.max()), "position_median": float(np.median(position)),
+            "rotation_max": float(rotation.max()), "rotation_median": float(np.median(rotation)),
         }
     report.seconds = time.perf_counter() - started
     return report

@@ -195,3 +195,18 @@ def test_seedless_ik_at_the_wrist_singularity(abb: dhkin.Robot) -> None:
 
     dropped = validate(abb, without_righty, n=N, seed=7)
     assert dropped.by_set["near_singular"].get("missing", 0) > 0
+
+
+def test_joint_tolerance_follows_the_conditioning(abb: dhkin.Robot) -> None:
+    """Away from singularities the missing check uses joint_tolerance; at |q5| = 1e-10 the pose
+    resolves q only to ~1e-14 / sigma_min, and the check allows that much, no more."""
+    from dhkin.validate import POSE_ROUNDING, _resolvable
+
+    generic = np.array([0.3, 0.2, -0.4, 0.5, 0.9, -0.2])
+    assert _resolvable(abb, generic, 1e-6) == pytest.approx(1e-6, rel=1e-6)
+    near = generic.copy()
+    near[4] = 1e-10
+    sigma_min = np.linalg.svd(abb.reference().jacobian(near), compute_uv=False).min()
+    assert sigma_min < 1e-9
+    assert _resolvable(abb, near, 1e-6) == pytest.approx(1e-6 + POSE_ROUNDING / sigma_min)
+    assert _resolvable(abb, near, 1e-6) < 1e-2

@@ -21,7 +21,10 @@ Outcome per sample, as in IKFast's test tooling:
   difference modulo 2pi <= ``joint_tolerance``). At the wrist singularity (|sin q5| <=
   :data:`WRIST_SINGULAR` in the sampled q) the pose fixes only a one-parameter family; an IK that
   takes ``q_seed`` gets the sampled q and must return it, while for an IK without ``q_seed`` only
-  the joints every such family keeps (joints 1 and 5) are compared;
+  the joints every such family keeps (joints 1 and 5) are compared. Near a singularity a pose
+  fixes q only to about (pose rounding) / sigma_min(J), so the joint tolerance there is
+  ``joint_tolerance + POSE_ROUNDING / sigma_min`` (sigma_min from Pinocchio's Jacobian at the
+  sampled q);
 * ``success``: none of the above.
 """
 
@@ -55,6 +58,9 @@ WRIST_JOINT = 4
 NEAR_SINGULAR_MAX = 1e-6
 #: |sin q5| at or below which a sample is on the wrist singularity for the missing check.
 WRIST_SINGULAR = 1e-6
+#: Pose rounding (m and rad) of a target computed in floating point, a few ulps of a 1 m arm:
+#: the joint difference a pose cannot resolve is about POSE_ROUNDING / sigma_min(J).
+POSE_ROUNDING = 1e-14
 #: Joints (0-based) compared at the wrist singularity for an IK that takes no seed.
 SINGULAR_FAMILY_FIXED_JOINTS = (0, 4)
 
@@ -330,6 +336,13 @@ class _Checked:
     rotation: NDArray[np.float64]
 
 
+def _resolvable(robot: Robot, q: NDArray[np.float64], joint_tolerance: float) -> float:
+    """Joint distance under which two solutions of one pose count as the same at q:
+    joint_tolerance + POSE_ROUNDING / sigma_min of Pinocchio's Jacobian (6 x n) at q."""
+    sigma = np.linalg.svd(robot.reference().jacobian(q), compute_uv=False)
+    return joint_tolerance + POSE_ROUNDING / max(float(sigma.min()), 1e-300)
+
+
 def _check_sample(robot: Robot, q_sampled: NDArray[np.float64], T: NDArray[np.float64],
                   returned: list[NDArray[np.float64]], tolerance: float, joint_tolerance: float,
                   seeded: bool) -> _Checked:
@@ -357,7 +370,7 @@ def _check_sample(robot: Robot, q_sampled: NDArray[np.float64], T: NDArray[np.fl
                         position, rotation)
     difference = wrap_revolute(robot.table, Q - q_sampled)
     closest = np.abs(difference[:, _compared_joints(robot, q_sampled, seeded)]).max(axis=1).min()
-    if closest > joint_tolerance:
+    if closest > joint_tolerance and closest > _resolvable(robot, q_sampled, joint_tolerance):
         return _Checked("missing", f"closest returned solution differs by {closest:.2e} "
                                    "(mod 2pi)", position, rotation)
     return _Checked("success", "", position, rotation)

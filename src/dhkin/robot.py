@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable, load_table
 from dhkin.errors import FamilyError, RobotNotFoundError
-from dhkin.ik.closed_form import DEFAULT_TOLERANCE, BranchSolver, solve_batch, solve_one
+from dhkin.ik.closed_form import DEFAULT_CHUNK, DEFAULT_TOLERANCE, BranchSolver, Pipeline
 from dhkin.ik.result import IKBatch, IKSolutions
 from dhkin.reference import Reference
 from dhkin.urdf import GeneratedFiles, generate
@@ -131,41 +131,75 @@ class Robot:
         """Whether a closed-form IK family fits this robot's table."""
         return self._closed_form_solver is not None
 
+    @cached_property
+    def _ik_pipeline(self) -> Pipeline | None:
+        """The closed-form pipeline (compiled constants built once), or None without a family."""
+        solver = self._closed_form_solver
+        return None if solver is None else Pipeline(solver, self.table)
+
     def ik(self, T: ArrayLike, q_seed: ArrayLike | None = None,
-           tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None) -> IKSolutions:
+           tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+           copies: bool = True) -> IKSolutions:
         """Every solution for pose ``T`` (base_link -> tool0) within the joint limits.
 
         Each solution is verified by FK to ``tolerance`` (m and rad). At a singularity the free
         joint is taken from ``q_seed`` (default 0) and the solution is flagged. With ``tcp``
-        (tool0 -> TCP, 4x4) the target ``T`` is the pose of that TCP instead of tool0.
+        (tool0 -> TCP, 4x4) the target ``T`` is the pose of that TCP instead of tool0. With
+        ``copies=False`` each branch gives one solution, not all its 2pi-shifted copies: the one
+        with each joint nearest to 0 (see dhkin.ik.closed_form).
 
         When no closed-form family fits, the numerical solver answers (``result.numerical`` is
         True, family "numerical"): the solution from the seed's basin first, not necessarily
         every solution.
         """
-        solver = self._closed_form_solver
-        if solver is None:
+        pipeline = self._ik_pipeline
+        if pipeline is None:
             from dhkin.ik.numerical import solver_for_robot
 
             return solver_for_robot(self).solve(T, q_seed, tolerance=tolerance, tcp=tcp)
-        return solve_one(solver, self.table, T, q_seed, tolerance, tcp)
+        return pipeline.solve_one(T, q_seed, tolerance, tcp, copies)
 
     def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
-                 tolerance: float = DEFAULT_TOLERANCE,
-                 tcp: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-        """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m)."""
-        if self._closed_form_solver is None:
+                 tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                 copies: bool = True, chunk_size: int = DEFAULT_CHUNK
+                 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m).
+
+        The same solutions as :meth:`ik` pose by pose, in the same order; rows are padded to the
+        largest count m. ``copies=False``: one solution per branch (m <= 8). Poses run in chunks
+        of ``chunk_size``; memory is the input and the output (with every copy a UR arm's +-360
+        deg joints give 256 or more solutions per pose: see :meth:`ik_batch_chunks` for very
+        large batches). Without a closed-form family the numerical solver answers (``copies``
+        and ``chunk_size`` do not apply).
+        """
+        if self._ik_pipeline is None:
             from dhkin.ik.numerical import solver_for_robot
 
             return solver_for_robot(self).solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)
-        batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp)
+        batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp, copies, chunk_size)
         return batch.q, batch.valid
 
     def ik_batch_detailed(self, T: ArrayLike, q_seed: ArrayLike | None = None,
-                          tolerance: float = DEFAULT_TOLERANCE,
-                          tcp: ArrayLike | None = None) -> IKBatch:
+                          tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                          copies: bool = True, chunk_size: int = DEFAULT_CHUNK) -> IKBatch:
         """Like :meth:`ik_batch`, with singularity flags and branch indices."""
-        return solve_batch(self.ik_solver, self.table, T, q_seed, tolerance, tcp)
+        return self._pipeline_or_raise().solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size)
+
+    def ik_batch_chunks(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                        tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                        copies: bool = True, chunk_size: int | None = None
+                        ) -> Iterator[tuple[int, IKBatch]]:
+        """:meth:`ik_batch_detailed` chunk by chunk, for batches too large to hold at once:
+        yields (index of the chunk's first pose, IKBatch of poses ``start:start + len``), each
+        chunk padded to its own largest count. Memory: the input and one chunk's results; the
+        default chunk size keeps those within about 64 MiB (closed_form.STREAM_BYTES)."""
+        return self._pipeline_or_raise().solve_chunks(T, q_seed, tolerance, tcp, copies, chunk_size)
+
+    def _pipeline_or_raise(self) -> Pipeline:
+        pipeline = self._ik_pipeline
+        if pipeline is None:  # ik_solver raises the FamilyError naming what each family lacks
+            return Pipeline(self.ik_solver, self.table)
+        return pipeline
 
     def singularity(self, q: ArrayLike,
                     thresholds: Thresholds | Mapping[str, float] | None = None

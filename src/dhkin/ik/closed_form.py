@@ -11,12 +11,29 @@ for every family:
    rotation tolerance, :data:`DEFAULT_TOLERANCE`) and drop any that is not exact;
 4. expand each surviving branch into all its 2pi-shifted copies inside the joint limits (values
    within :data:`LIMIT_TOLERANCE` outside a limit are set onto the limit, then verified again).
+
+How it runs (:class:`Pipeline`): steps 1, 3 and 4 are compiled kernels (:mod:`dhkin.ik.kernels`,
+numba), and so is step 2 for a family that provides ``compiled()`` (spherical wrist, Stanford);
+other families' numpy ``solve`` runs between the kernels. A 2pi-shifted copy is not verified
+again unless it was moved onto a limit or its branch's error is within :data:`COPY_MARGIN` of the
+tolerance: the shift changes FK by rounding only (~1e-15 m per m of arm, rad), so every returned
+solution still reproduces the target within the tolerance, and the result is that of verifying
+every copy. Poses run in chunks of ``chunk_size``; kernels allocate nothing per pose, so memory is
+the inputs and outputs (:meth:`Pipeline.solve_chunks` streams a batch chunk by chunk instead).
+
+``copies=False`` returns one solution per branch instead of every copy: the copy with each joint
+nearest to 0 (the principal value where it lies within the limits), like the peer libraries that
+return principal solutions only.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import dataclasses
+import math
+import threading
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType, ModuleType
 from typing import Protocol
 
 import numpy as np
@@ -32,6 +49,15 @@ TWO_PI = 2.0 * np.pi
 DEFAULT_TOLERANCE = 1e-9
 #: Values this far (rad or m) outside a joint limit count as on the limit.
 LIMIT_TOLERANCE = 1e-10
+#: A branch whose error is within this of the tolerance has each of its copies verified itself
+#: (a 2pi shift changes FK by rounding, ~1e-15 per m of arm: a thousandfold margin up to 10 m).
+COPY_MARGIN = 1e-11
+#: Poses per kernel call of :meth:`Pipeline.solve_batch` (and at most per chunk of solve_chunks).
+DEFAULT_CHUNK = 65536
+#: solve_chunks' default chunks hold at most this much output (bytes).
+STREAM_BYTES = 64 * 2**20
+#: Singularity flag names of each bit mask, shared by every result.
+_FLAG_SETS: tuple[frozenset[str], ...] = tuple(flag_names(bits) for bits in range(8))
 
 
 @dataclass(frozen=True)
@@ -64,6 +90,9 @@ class BranchSolver(Protocol):
         0.83 m from the shoulder, reach 0.70 m". Empty when the geometry has solutions (then
         the joint limits exclude all of them)."""
         ...
+
+    # Optional: ``compiled() -> (family id, geometry vector)`` selects a compiled solver of
+    # dhkin.ik.kernels that gives the same branches as ``solve``.
 
 
 def as_targets(T: ArrayLike) -> tuple[NDArray[np.float64], bool]:
@@ -103,12 +132,6 @@ def wrap_revolute(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.float64]
     revolute = np.array([j.is_revolute for j in table.joints])
     wrapped = np.pi - np.mod(np.pi - q, TWO_PI)
     return np.where(revolute, wrapped, q)
-
-
-def _dh_target(table: DHTable, T: NDArray[np.float64],
-               tcp: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
-    flange_to_target = table.tool if tcp is None else table.tool @ tcp
-    return invert(table.base) @ T @ invert(flange_to_target)
 
 
 def _as_tcp(tcp: ArrayLike | None) -> NDArray[np.float64] | None:
@@ -162,7 +185,8 @@ def _exact(table: DHTable, q: NDArray[np.float64], T_dh: NDArray[np.float64],
 
 def expand_turns(table: DHTable, q: NDArray[np.float64]) -> tuple[NDArray[np.int64],
                                                                    NDArray[np.float64]]:
-    """All 2pi-shifted copies of solutions q (R, n) inside the joint limits.
+    """All 2pi-shifted copies of solutions q (R, n) inside the joint limits (numpy; the kernels
+    expand the same way, in the same order: tests/test_ik_batch.py compares them).
 
     Returns (row index into q (M,), values (M, n)). Prismatic joints have no copies. Values
     within LIMIT_TOLERANCE outside a limit are put on it.
@@ -198,65 +222,428 @@ def turns_of(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.int64]:
     return np.where(revolute, np.round(q / TWO_PI), 0).astype(np.int64)
 
 
+
+def _kernels() -> ModuleType:
+    """dhkin.ik.kernels, imported on first use (importing numba takes ~0.5 s)."""
+    from dhkin.ik import kernels
+
+    return kernels
+
+
+def _input_error(targets: NDArray[np.float64], index: int, status: int) -> IKInputError:
+    """The error :func:`as_targets` raises for pose ``index`` (status from the kernels)."""
+    kernels = _kernels()
+    if status == kernels.STATUS_NOT_FINITE:
+        return IKInputError("T: expected finite numbers, got NaN or inf")
+    R = np.asarray(targets[index], dtype=float)[:3, :3]
+    orthogonality = float(np.abs(R @ R.T - np.eye(3)).max())
+    return IKInputError(f"T[{index}]: rotation block is not a rotation matrix "
+                        f"(|R R^T - I| = {orthogonality:.2e}, expected <= 1e-6)")
+
+
+def solve_compiled(solver: BranchSolver, T_dh: ArrayLike, q_seed: ArrayLike) -> Branches:
+    """:meth:`BranchSolver.solve` by the solver's compiled twin (``solver.compiled()``):
+    principal solutions of DH targets (N, 4, 4) with seeds (N, n)."""
+    kernels = _kernels()
+    family_id, geometry = solver.compiled()  # type: ignore[attr-defined]
+    targets = np.ascontiguousarray(T_dh, dtype=np.float64)
+    seeds = np.ascontiguousarray(q_seed, dtype=np.float64)
+    if targets.ndim != 3 or targets.shape[1:] != (4, 4):
+        raise IKInputError(f"T_dh: expected (N, 4, 4) targets, got {targets.shape}")
+    n_poses, n_branches = targets.shape[0], len(solver.branch_labels)
+    dof = seeds.shape[-1]
+    if seeds.shape != (n_poses, dof):
+        raise IKInputError(f"q_seed: expected shape ({n_poses}, n), got {seeds.shape}")
+    q = np.empty((n_poses, n_branches, dof))
+    valid = np.empty((n_poses, n_branches), bool)
+    flags = np.zeros((n_poses, n_branches), np.uint8)
+    kernels.solve_branches(family_id, geometry, targets, seeds, q, valid, flags)
+    return Branches(q=q, valid=valid, flags=flags)
+
+
+class Pipeline:
+    """The pipeline of one family solver and table, with the constants of the compiled kernels
+    built once (a :class:`~dhkin.robot.Robot` keeps one).
+
+    :meth:`solve_batch`, :meth:`solve_chunks` and :meth:`solve_one` give the results of the
+    module docstring; they are safe to call from several threads (the kernels release the GIL).
+    """
+
+    def __init__(self, solver: BranchSolver, table: DHTable) -> None:
+        kernels = _kernels()
+        self.solver, self.table, self.kernels = solver, table, kernels
+        self.dof = table.dof
+        self.n_branches = len(solver.branch_labels)
+        joints = table.joints
+        self.chain = kernels.chain_array(
+            np.array([j.a for j in joints]), np.array([j.alpha for j in joints]),
+            np.array([j.d for j in joints]), np.array([j.theta for j in joints]),
+            np.array([j.direction for j in joints], dtype=float),
+            np.array([j.offset for j in joints]), np.array([j.is_revolute for j in joints]))
+        self.modified = table.convention == "modified"
+        self.limits = np.ascontiguousarray(np.stack([table.lower, table.upper], axis=1))
+        self._base_inverse = invert(table.base)
+        self.frames = self.frames_for(None)
+        compiled = getattr(solver, "compiled", None)
+        if callable(compiled):
+            family_id, geometry = compiled()
+        else:
+            family_id, geometry = kernels.NO_KERNEL, np.zeros(1)
+        self.family_id = int(family_id)
+        self.geometry = np.ascontiguousarray(geometry, dtype=np.float64)
+        spans = table.upper - table.lower + 2 * LIMIT_TOLERANCE
+        per_joint = np.where([j.is_revolute for j in joints], np.floor(spans / TWO_PI) + 1, 1)
+        #: Most solutions one pose can have (every branch with every copy).
+        self.max_solutions = int(self.n_branches * np.prod(per_joint))
+        self._zero_seed = np.zeros(self.dof)
+        self._labels = tuple(MappingProxyType(dict(labels)) for labels in solver.branch_labels)
+        self._configurations: dict[int, Configuration] = {}
+        self._descriptions: dict[bytes, tuple[tuple[Configuration, ...],
+                                              tuple[frozenset[str], ...]]] = {}
+        self._configuration_by_key: dict[int, Configuration] = {}
+        self._tolerances: dict[float, NDArray[np.float64]] = {}
+        self._buffers = threading.local()
+        self.family = solver.family
+        #: The packed constants of kernels.solve_one (None without a compiled family solver).
+        self.plan = None if family_id == kernels.NO_KERNEL else kernels.plan_array(
+            family_id, self.modified, self.n_branches, self.geometry, self.chain, self.limits)
+
+    @property
+    def compiled(self) -> bool:
+        """Whether the family's solver itself is compiled (else its numpy ``solve`` runs)."""
+        return self.family_id != self.kernels.NO_KERNEL
+
+    # ---------------------------------------------------------------------------------------
+    # Per-call constants
+
+    def frames_for(self, tcp: ArrayLike | None) -> NDArray[np.float64]:
+        """(2, 4, 4): base^-1 and (tool @ tcp)^-1 (see kernels)."""
+        frame = _as_tcp(tcp)
+        flange_to_target = self.table.tool if frame is None else self.table.tool @ frame
+        return np.ascontiguousarray(np.stack([self._base_inverse, invert(flange_to_target)]))
+
+    def tolerances(self, tolerance: float) -> NDArray[np.float64]:
+        """The kernels' tolerance vector for ``tolerance`` (cached per value)."""
+        found = self._tolerances.get(tolerance)
+        if found is None:
+            def tangent(angle: float) -> float:
+                return math.tan(angle) if 0.0 <= angle < 0.5 * math.pi else math.nan
+
+            tol = float(tolerance)
+            found = np.array([tol, tangent(tol), tol - COPY_MARGIN, tangent(tol - COPY_MARGIN),
+                              LIMIT_TOLERANCE])
+            if len(self._tolerances) < 64:
+                self._tolerances[tolerance] = found
+        return found
+
+    def _seeds(self, q_seed: ArrayLike | None, n_poses: int) -> NDArray[np.float64]:
+        """Seeds as (1, n) (one for all poses) or (N, n); as_seeds' checks and errors."""
+        if q_seed is None:
+            return self._zero_seed[None]
+        seeds = np.asarray(q_seed, dtype=float)
+        if seeds.shape == (self.dof,) and np.all(np.isfinite(seeds)):
+            return np.ascontiguousarray(seeds[None])
+        return np.ascontiguousarray(as_seeds(seeds, n_poses, self.dof))
+
+    # ---------------------------------------------------------------------------------------
+    # Batches
+
+    def solve_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                    tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                    copies: bool = True, chunk_size: int = DEFAULT_CHUNK) -> IKBatch:
+        """Every solution of N poses (N, 4, 4) within the limits (one per branch with
+        ``copies=False``), verified by FK; rows padded to the largest count.
+
+        Memory: the input and the output, plus per pose 8 (B + 1) bytes of counts with
+        ``copies=True`` and per chunk a few arrays of chunk_size x B. With ``copies=False`` the
+        output is written in place of the principal solutions (its rows may then be a view
+        of B-wide arrays)."""
+        targets = self._targets(T, chunk_size)
+        n_poses, dof, n_branches = targets.shape[0], self.dof, self.n_branches
+        seeds = self._seeds(q_seed, n_poses)
+        frames = self.frames_for(tcp) if tcp is not None else self.frames
+        tolerances = self.tolerances(tolerance)
+        q = np.empty((n_poses, n_branches, dof))
+        ok = np.empty((n_poses, n_branches), bool)
+        flags = np.zeros((n_poses, n_branches), np.uint8)
+        chunks = [(start, min(start + chunk_size, n_poses))
+                  for start in range(0, n_poses, chunk_size)]
+        if copies:  # every principal solution first: the output's width is the largest count
+            recheck = np.empty((n_poses, n_branches), bool)
+            totals = np.empty((n_poses, n_branches), np.int64)
+            for start, stop in chunks:
+                self._principal(targets, start, stop, seeds, frames, tolerances,
+                                q[start:stop], ok[start:stop], flags[start:stop],
+                                recheck[start:stop], totals[start:stop])
+            width = int(np.where(ok, totals, 0).sum(axis=1).max()) if n_poses else 0
+            out_q = np.empty((n_poses, width, dof))
+            out_valid = np.empty((n_poses, width), bool)
+            out_flags = np.empty((n_poses, width), np.uint8)
+        else:  # one row per branch at most: each chunk is expanded over its own principal rows
+            width = n_branches
+            out_q, out_valid, out_flags = q, ok, flags
+        out_branch = np.empty((n_poses, width), np.int16)
+        widest = 0
+        for start, stop in chunks:
+            rows = slice(start, stop)
+            if not copies:
+                recheck = np.empty((stop - start, n_branches), bool)
+                totals = np.empty((stop - start, n_branches), np.int64)
+                self._principal(targets, start, stop, seeds, frames, tolerances, q[rows],
+                                ok[rows], flags[rows], recheck, totals)
+            chunk_rows = slice(0, stop - start) if not copies else rows
+            used = self.kernels.expand(
+                self.chain, self.modified, self.limits, frames,
+                np.ascontiguousarray(targets[rows], dtype=np.float64), tolerances, copies,
+                q[rows], ok[rows], flags[rows], recheck[chunk_rows], totals[chunk_rows],
+                out_q[rows], out_valid[rows], out_flags[rows], out_branch[rows], not copies)
+            if used < 0:  # cannot happen: width counts every copy
+                raise RuntimeError("IK expansion: more solutions than counted")
+            widest = max(widest, used)
+        if widest < width:
+            out_q, out_valid = out_q[:, :widest], out_valid[:, :widest]
+            out_flags, out_branch = out_flags[:, :widest], out_branch[:, :widest]
+        return IKBatch(q=out_q, valid=out_valid, flags=out_flags, branch=out_branch,
+                       branch_labels=tuple(self.solver.branch_labels), family=self.family)
+
+    @staticmethod
+    def _targets(T: ArrayLike, chunk_size: int) -> NDArray[np.float64]:
+        """Poses as (N, 4, 4) (a single (4, 4) pose is N = 1), without a copy where possible."""
+        targets = np.asarray(T)
+        if targets.shape == (4, 4):
+            targets = targets[None]
+        if targets.ndim != 3 or targets.shape[1:] != (4, 4):
+            raise IKInputError(f"T: expected a (4, 4) pose or (N, 4, 4) poses, got {np.shape(T)}")
+        if not np.issubdtype(targets.dtype, np.number) or np.iscomplexobj(targets):
+            raise IKInputError(f"T: expected real numbers, got dtype {targets.dtype}")
+        if chunk_size < 1:
+            raise IKInputError(f"chunk_size: expected a positive number, got {chunk_size}")
+        return targets
+
+    def solve_chunks(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                     tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                     copies: bool = True,
+                     chunk_size: int | None = None) -> Iterator[tuple[int, IKBatch]]:
+        """:meth:`solve_batch` chunk by chunk: yields (index of the chunk's first pose, its
+        IKBatch); each chunk is padded to its own largest count. Only one chunk's results are
+        held at a time, so any number of poses (and UR's 256 and more copies each) fits. The
+        default chunk_size holds :data:`STREAM_BYTES` of output at the most solutions a pose
+        of this robot can have (:attr:`max_solutions`, or B with ``copies=False``)."""
+        if chunk_size is None:
+            per_pose = (self.max_solutions if copies else self.n_branches) * (8 * self.dof + 4)
+            chunk_size = int(min(DEFAULT_CHUNK, max(1024, STREAM_BYTES // per_pose)))
+        targets = self._targets(T, chunk_size)
+        seeds = self._seeds(q_seed, targets.shape[0])
+        for start in range(0, targets.shape[0], chunk_size):
+            stop = min(start + chunk_size, targets.shape[0])
+            chunk_seeds = seeds[0] if seeds.shape[0] == 1 else seeds[start:stop]
+            try:
+                batch = self.solve_batch(targets[start:stop], chunk_seeds, tolerance, tcp,
+                                         copies, chunk_size)
+            except IKInputError as error:
+                raise _shift_index(error, start) from None
+            yield start, batch
+
+    def _principal(self, targets: NDArray[np.float64], start: int, stop: int,
+                   seeds: NDArray[np.float64], frames: NDArray[np.float64],
+                   tolerances: NDArray[np.float64], q: NDArray[np.float64],
+                   ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+                   recheck: NDArray[np.bool_], totals: NDArray[np.int64]) -> None:
+        """Steps 1-3 for poses start:stop into the given slices of the principal arrays."""
+        kernels = self.kernels
+        chunk = np.ascontiguousarray(targets[start:stop], dtype=np.float64)
+        chunk_seeds = seeds if seeds.shape[0] == 1 else seeds[start:stop]
+        status = np.empty(stop - start, np.int8)
+        if self.compiled:
+            kernels.solve_principal(self.family_id, self.geometry, self.chain, self.modified,
+                                    self.limits, frames, chunk, chunk_seeds, tolerances, q, ok,
+                                    flags, recheck, totals, status)
+        else:
+            kernels.check_targets(chunk, status)
+        bad = np.flatnonzero(status)
+        if bad.size:
+            raise _input_error(targets, start + int(bad[0]), int(status[bad[0]]))
+        if self.compiled:
+            return
+        T_dh = frames[0] @ chunk @ frames[1]
+        branches = self.solver.solve(T_dh, np.array(np.broadcast_to(chunk_seeds,
+                                                                    (stop - start, self.dof))))
+        q[:] = branches.q
+        flags[:] = branches.flags
+        kernels.finish_principal(self.chain, self.modified, self.limits,
+                                 np.ascontiguousarray(T_dh), tolerances, q,
+                                 np.ascontiguousarray(branches.valid, dtype=bool), ok, recheck,
+                                 totals)
+
+    # ---------------------------------------------------------------------------------------
+    # One pose
+
+    def solve_one(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                  tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                  copies: bool = True) -> IKSolutions:
+        """Every solution of one pose (4, 4), with configurations, flags, residuals and, when
+        there is none, the reason. One kernel call; buffers are kept per thread."""
+        target = np.asarray(T, dtype=np.float64)
+        if target.shape != (4, 4):
+            raise IKInputError(f"T: expected a (4, 4) pose, got shape {target.shape}")
+        if self.plan is None:
+            return self._solve_one_numpy(target, q_seed, tolerance, tcp, copies)
+        if not target.flags.c_contiguous:
+            target = np.ascontiguousarray(target)
+        if q_seed is None:
+            seed = self._zero_seed
+        else:
+            seed = np.asarray(q_seed, dtype=np.float64)
+            if seed.shape != (self.dof,):
+                as_seeds(seed[None], 1, self.dof)  # raises the shape error
+            if not seed.flags.c_contiguous:
+                seed = np.ascontiguousarray(seed)
+        tolerances = self._tolerances.get(tolerance)
+        if tolerances is None:
+            tolerances = self.tolerances(tolerance)
+        try:
+            out_q, out_errors, out_keys, scratch = self._buffers.arrays
+        except AttributeError:  # first call in this thread
+            out_q = np.empty((self.max_solutions, self.dof))
+            out_errors = np.empty((self.max_solutions, 2))
+            out_keys = np.empty(self.max_solutions, np.int64)
+            scratch = np.empty(self.kernels.one_scratch_size(self.dof, self.n_branches))
+            self._buffers.arrays = out_q, out_errors, out_keys, scratch
+        count = self.kernels.solve_one(self.plan, self.frames if tcp is None else
+                                       self.frames_for(tcp), target, seed, tolerances, copies,
+                                       out_q, out_errors, out_keys, scratch)
+        if count <= 0:
+            return self._no_solution(count, target, seed, tcp)
+        q = out_q[:count].copy()
+        keys = out_keys[:count]
+        described = self._descriptions.get(keys.tobytes())
+        if described is None:
+            described = self._describe(keys, q)
+        return _solutions(q, described[0], described[1], out_errors[:count].copy(), self.family)
+
+    def _describe(self, keys: NDArray[np.int64], q: NDArray[np.float64]
+                  ) -> tuple[tuple[Configuration, ...], tuple[frozenset[str], ...]]:
+        """Configurations and flags of solutions from solve_one's keys (see kernels.solve_one),
+        from per-key caches; short key sequences are remembered whole. The caches are emptied
+        when they grow past 2^16 entries."""
+        listed = keys.tolist()
+        try:
+            configurations = tuple(map(self._configuration_by_key.__getitem__, listed))
+        except KeyError:
+            configurations = tuple(self._remember_key(key, q[k]) for k, key in enumerate(listed))
+        flags = tuple(map(_FLAG_SETS.__getitem__, (keys & 7).tolist()))
+        if len(listed) <= 64 and min(listed) >= 0:
+            if len(self._descriptions) >= 65536:
+                self._descriptions.clear()
+            self._descriptions[keys.tobytes()] = configurations, flags
+        return configurations, flags
+
+    def _remember_key(self, key: int, q: NDArray[np.float64]) -> Configuration:
+        """The Configuration of one solve_one key, cached by key where its code fits."""
+        found = self._configuration_by_key.get(key)
+        if found is None:
+            code = key >> 3
+            branch = code % self.n_branches if code >= 0 else code + self.n_branches
+            found = self._configuration(code, branch, q)
+            if code >= 0:  # else turns too large to encode: not cacheable
+                if len(self._configuration_by_key) >= 65536:
+                    self._configuration_by_key.clear()
+                self._configuration_by_key[key] = found
+        return found
+
+    def _no_solution(self, count: int, target: NDArray[np.float64], seed: NDArray[np.float64],
+                     tcp: ArrayLike | None) -> IKSolutions:
+        """solve_one's answer for a kernel count <= 0: an input error, or no solution."""
+        kernels = self.kernels
+        if count == -kernels.STATUS_BAD_SEED:
+            as_seeds(seed[None], 1, self.dof)  # raises the finiteness error
+        if count == kernels.NEEDS_MORE_ROWS:  # cannot happen: max_solutions counts every copy
+            raise RuntimeError("IK expansion: more solutions than counted")
+        if count < 0:
+            raise _input_error(target[None], 0, -count)
+        frames = self.frames if tcp is None else self.frames_for(tcp)
+        reason = self.solver.explain(frames[0] @ target @ frames[1])
+        return IKSolutions(q=np.zeros((0, self.dof)), family=self.family,
+                           reason=reason or "no branch solution lies within the joint limits")
+
+    def _configuration(self, code: int, branch: int, q: NDArray[np.float64]) -> Configuration:
+        """The (shared, read-only) Configuration of a branch and turns; cached by code (-1: a
+        turn too large to encode; the branch then comes from the caller)."""
+        found = self._configurations.get(code) if code >= 0 else None
+        if found is None:
+            turns = tuple(int(t) for t in turns_of(self.table, q[None])[0])
+            found = Configuration(labels=self._labels[branch], turns=turns)
+            if code >= 0:
+                self._configurations[code] = found
+        return found
+
+    def _solve_one_numpy(self, target: NDArray[np.float64], q_seed: ArrayLike | None,
+                         tolerance: float, tcp: ArrayLike | None, copies: bool) -> IKSolutions:
+        """solve_one for a family without a compiled solver: the batch path with N = 1."""
+        seeds = None if q_seed is None else np.asarray(q_seed, dtype=float)[None]
+        batch = self.solve_batch(target[None], seeds, tolerance, tcp, copies)
+        keep = batch.valid[0]
+        q = batch.q[0][keep]
+        frames = self.frames if tcp is None else self.frames_for(tcp)
+        T_dh = frames[0] @ target @ frames[1]
+        if q.shape[0] == 0:
+            reason = self.solver.explain(T_dh) or "no branch solution lies within the joint limits"
+            return IKSolutions(q=np.zeros((0, self.dof)), reason=reason, family=self.solver.family)
+        configurations = tuple(
+            Configuration(labels=self._labels[b], turns=tuple(int(t) for t in turns))
+            for b, turns in zip(batch.branch[0][keep], turns_of(self.table, q), strict=True))
+        _, residuals = _exact(self.table, q, np.broadcast_to(T_dh, (q.shape[0], 4, 4)),
+                              tolerance)
+        return IKSolutions(q=q, configurations=configurations,
+                           flags=tuple(_FLAG_SETS[int(f)] for f in batch.flags[0][keep]),
+                           residuals=residuals, family=self.solver.family)
+
+
+def _plain_dataclass(cls: type) -> bool:
+    """Whether instances of the dataclass ``cls`` are plain __dict__ objects whose __init__ only
+    stores its fields (so that filling __dict__ directly gives the same object)."""
+    return (not hasattr(cls, "__post_init__") and not hasattr(cls, "__slots__")
+            and all(f.init for f in dataclasses.fields(cls)))
+
+
+_FAST_SOLUTIONS = _plain_dataclass(IKSolutions)
+
+
+def _solutions(q: NDArray[np.float64], configurations: tuple[Configuration, ...],
+               flags: tuple[frozenset[str], ...], residuals: NDArray[np.float64],
+               family: str) -> IKSolutions:
+    """IKSolutions of a successful solve_one, built without the frozen dataclass's field by
+    field __init__ where that is equivalent (it is a third of the single-pose overhead)."""
+    if not _FAST_SOLUTIONS:
+        return IKSolutions(q=q, configurations=configurations, flags=flags, residuals=residuals,
+                           family=family)
+    result = object.__new__(IKSolutions)
+    result.__dict__.update(q=q, configurations=configurations, flags=flags,
+                           residuals=residuals, reason="", family=family, numerical=False)
+    return result
+
+
+def _shift_index(error: IKInputError, start: int) -> IKInputError:
+    """An IKInputError about pose T[i] of a chunk, renumbered to T[start + i] of the batch."""
+    message = str(error)
+    if start and message.startswith("T["):
+        index, rest = message[2:].split("]", 1)
+        if index.isdigit():
+            return IKInputError(f"T[{int(index) + start}]{rest}")
+    return error
+
+
 def solve_batch(solver: BranchSolver, table: DHTable, T: ArrayLike, q_seed: ArrayLike | None = None,
-                tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None) -> IKBatch:
-    """Every solution of N poses within the limits, verified by FK; see the module docstring."""
-    targets, _ = as_targets(T)
-    n_poses, dof = targets.shape[0], table.dof
-    seeds = as_seeds(q_seed, n_poses, dof)
-    T_dh = _dh_target(table, targets, _as_tcp(tcp))
-    branches = solver.solve(T_dh, seeds)
-    n_branches = branches.q.shape[1]
-
-    pose_idx, branch_idx = np.nonzero(branches.valid)
-    principal = wrap_revolute(table, branches.q[pose_idx, branch_idx])
-    finite = np.all(np.isfinite(principal), axis=1)
-    pose_idx, branch_idx, principal = pose_idx[finite], branch_idx[finite], principal[finite]
-    exact, _ = _exact(table, principal, T_dh[pose_idx], tolerance)
-    pose_idx, branch_idx, principal = pose_idx[exact], branch_idx[exact], principal[exact]
-
-    rows, values = expand_turns(table, principal)
-    pose_of, branch_of = pose_idx[rows], branch_idx[rows]
-    exact, _ = _exact(table, values, T_dh[pose_of], tolerance)
-    pose_of, branch_of, values = pose_of[exact], branch_of[exact], values[exact]
-
-    counts = np.bincount(pose_of, minlength=n_poses)
-    width = int(counts.max()) if counts.size and counts.max() > 0 else 0
-    slot = np.arange(pose_of.size) - np.repeat(np.cumsum(counts) - counts, counts)
-    Q = np.zeros((n_poses, width, dof))
-    valid = np.zeros((n_poses, width), bool)
-    flags = np.zeros((n_poses, width), np.uint8)
-    branch = np.full((n_poses, width), -1, np.int16)
-    Q[pose_of, slot] = values
-    valid[pose_of, slot] = True
-    flags[pose_of, slot] = branches.flags[pose_of, branch_of]
-    branch[pose_of, slot] = branch_of
-    assert n_branches == len(solver.branch_labels)
-    return IKBatch(q=Q, valid=valid, flags=flags, branch=branch,
-                   branch_labels=tuple(solver.branch_labels), family=solver.family)
+                tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                copies: bool = True, chunk_size: int = DEFAULT_CHUNK) -> IKBatch:
+    """Every solution of N poses within the limits, verified by FK; see the module docstring.
+    (Builds a :class:`Pipeline` per call: keep one to solve repeatedly.)"""
+    return Pipeline(solver, table).solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size)
 
 
 def solve_one(solver: BranchSolver, table: DHTable, T: ArrayLike, q_seed: ArrayLike | None = None,
-              tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None) -> IKSolutions:
-    """Every solution of one pose (4, 4), with configurations, flags, residuals and a reason."""
-    target = np.asarray(T, dtype=float)
-    if target.shape != (4, 4):
-        raise IKInputError(f"T: expected a (4, 4) pose, got shape {target.shape}")
-    batch = solve_batch(solver, table, target[None], None if q_seed is None else
-                        np.asarray(q_seed, dtype=float)[None], tolerance, tcp)
-    T_dh = _dh_target(table, target[None], _as_tcp(tcp))[0]
-    keep = batch.valid[0]
-    q = batch.q[0][keep]
-    if q.shape[0] == 0:
-        reason = solver.explain(T_dh)
-        if not reason:
-            reason = "no branch solution lies within the joint limits"
-        return IKSolutions(q=np.zeros((0, table.dof)), reason=reason, family=solver.family)
-    turns = turns_of(table, q)
-    configurations = tuple(
-        Configuration(labels=dict(batch.branch_labels[b]), turns=tuple(int(t) for t in tr))
-        for b, tr in zip(batch.branch[0][keep], turns, strict=True))
-    flags = tuple(flag_names(f) for f in batch.flags[0][keep])
-    _, residuals = _exact(table, q, np.broadcast_to(T_dh, (q.shape[0], 4, 4)), tolerance)
-    return IKSolutions(q=q, configurations=configurations, flags=flags, residuals=residuals,
-                       family=solver.family)
+              tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+              copies: bool = True) -> IKSolutions:
+    """Every solution of one pose (4, 4), with configurations, flags, residuals and a reason.
+    (Builds a :class:`Pipeline` per call: keep one to solve repeatedly.)"""
+    return Pipeline(solver, table).solve_one(T, q_seed, tolerance, tcp, copies)

@@ -45,13 +45,14 @@ first label (left / up / up), the twin branch is marked invalid, and the solutio
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
-from dhkin.ik.closed_form import Branches
+from dhkin.ik.closed_form import Branches, solve_compiled
 from dhkin.ik.result import ELBOW, SHOULDER, WRIST
 
 FAMILY = "offset_wrist"
@@ -336,7 +337,28 @@ class Solver:
         self.table = table
         self.geometry = OffsetWristGeometry.from_table(table)
 
+    @cached_property
+    def _compiled(self) -> tuple[int, NDArray[np.float64]]:
+        """The compiled twin of :meth:`solve` (dhkin.ik.kernels.solve_offset_wrist): its family
+        id and geometry vector."""
+        from dhkin.ik import kernels
+
+        g = self.geometry
+        return kernels.OFFSET_WRIST, kernels.offset_wrist_geometry(
+            directions=g.axes.directions, points=g.axes.points, up_1=g.axes.up[0], n=g.n,
+            plane_x=g.plane_x, wrist_in_flange=g.wrist_in_flange, wrist_point=g.wrist_point,
+            home=g.axes.home, home_inverse=g.home_inverse, upper_arm=g.upper_arm,
+            forearm=g.forearm, lateral=g.lateral, psi=g.psi, q5_singular=g.q5_singular,
+            sign3=g.sign3, sign4=g.sign4, upper_length=g.upper_length,
+            forearm_length=g.forearm_length, axis_tolerance=AXIS_TOLERANCE,
+            reach_tolerance=REACH_TOLERANCE, merge_angle=MERGE_ANGLE,
+            wrist_singular_sin=WRIST_SINGULAR_SIN, exact_band=EXACT_BAND)
+
     # -- step 1: q1 -------------------------------------------------------------------------
+
+    def compiled(self) -> tuple[int, NDArray[np.float64]]:
+        """Family id and geometry vector of the compiled solver (dhkin.ik.kernels)."""
+        return self._compiled
 
     def _shoulder(self, wrist: NDArray[np.float64], seed_q1: NDArray[np.float64]) -> _Shoulder:
         """Both roots of ``n(q1) . (wrist - r1) = c`` for wrist points (N, 3)."""
@@ -496,7 +518,18 @@ class Solver:
         return shoulder, wrist, self._elbow(G, shoulder.reach_side, seed[:, 1])
 
     def solve(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]) -> Branches:
-        """Principal solutions of N targets (DH frame 0 -> 6), 8 branches each; see the class."""
+        """Principal solutions of N targets (DH frame 0 -> 6), 8 branches each; see the class.
+
+        Computed by the compiled twin (dhkin.ik.kernels.solve_offset_wrist) of
+        :meth:`solve_reference`, the vectorised numpy formulation it ports step by step.
+        """
+        return solve_compiled(self, T_dh, q_seed)
+
+    def solve_reference(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]
+                        ) -> Branches:
+        """:meth:`solve` in numpy, vectorised over N: the reference the compiled kernel follows
+        (tests compare the two; they differ by rounding, and where the pose leaves joints
+        ill-conditioned, e.g. q4 and q6 near q5 = 0, by as much as it allows)."""
         T = np.asarray(T_dh, dtype=float)
         seed = np.asarray(q_seed, dtype=float)
         shoulder, wrist, elbow = self._solve_parts(T, seed)

@@ -58,13 +58,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
-from dhkin.ik.closed_form import Branches
+from dhkin.ik.closed_form import Branches, solve_compiled
 from dhkin.ik.result import ELBOW, SHOULDER, WRIST
 
 FAMILY = "spherical_wrist"
@@ -410,6 +411,22 @@ def wrist_rotations(arm_rotation: NDArray[np.float64], T_dh: NDArray[np.float64]
     return np.swapaxes(arm_rotation, -1, -2) @ target[:, None]
 
 
+def compiled_geometry(shoulder: Shoulder, wrist: Wrist, flange_zero: NDArray[np.float64],
+                      arm_signs: tuple[float, float, float], scale: float,
+                      arm: tuple[float, ...]) -> NDArray[np.float64]:
+    """Geometry vector of the compiled solvers (dhkin.ik.kernels.arm_geometry): the shoulder,
+    the wrist, the tolerances of this module and the family's ``arm`` values."""
+    from dhkin.ik import kernels
+
+    return kernels.arm_geometry(
+        centre_in_flange=wrist.centre_in_flange, origin=shoulder.origin,
+        forward=shoulder.forward, lateral=shoulder.lateral, up=shoulder.up,
+        shoulder_offset=shoulder.shoulder_offset, lateral_offset=shoulder.lateral_offset,
+        signs=arm_signs, wrist_frame=wrist.frame, flange_rotation=flange_zero[:3, :3],
+        tilt=wrist.tilt, wrist_directions=wrist.directions, scale=scale, snap=SNAP_TOLERANCE,
+        wrist_snap=WRIST_SNAP_TOLERANCE, flag=SINGULAR_FLAG_TOLERANCE, arm=arm)
+
+
 # --------------------------------------------------------------------------------------------
 # The elbow: a 2R problem in the arm plane
 
@@ -571,8 +588,35 @@ class Solver:
                                "wrist": wrist_label(front, q5_positive)})
         self.branch_labels: tuple[Mapping[str, str], ...] = tuple(labels)
 
+    @cached_property
+    def _compiled(self) -> tuple[int, NDArray[np.float64]]:
+        """The compiled twin of :meth:`solve` (dhkin.ik.kernels.solve_spherical_wrist): its
+        family id and geometry vector."""
+        from dhkin.ik import kernels
+
+        g = self.geometry
+        arm = (g.upper_arm.real, g.upper_arm.imag, g.forearm.real, g.forearm.imag,
+               abs(g.upper_arm), abs(g.forearm), float(np.angle(g.forearm / g.upper_arm)))
+        return kernels.SPHERICAL_WRIST, compiled_geometry(g.shoulder, g.wrist, g.flange_zero,
+                                                          g.arm_signs, g.scale, arm)
+
+    def compiled(self) -> tuple[int, NDArray[np.float64]]:
+        """Family id and geometry vector of the compiled solver (dhkin.ik.kernels)."""
+        return self._compiled
+
     def solve(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]) -> Branches:
-        """Principal solutions (N, 8, 6) of flange targets T_dh (N, 4, 4), DH frame 0 -> n."""
+        """Principal solutions (N, 8, 6) of flange targets T_dh (N, 4, 4), DH frame 0 -> n.
+
+        Computed by the compiled twin (dhkin.ik.kernels.solve_spherical_wrist) of
+        :meth:`solve_reference`, the vectorised numpy formulation it ports step by step.
+        """
+        return solve_compiled(self, T_dh, q_seed)
+
+    def solve_reference(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]
+                        ) -> Branches:
+        """:meth:`solve` in numpy, vectorised over N: the reference the compiled kernel follows
+        (tests compare the two; they differ by rounding, and where the pose leaves joints
+        ill-conditioned, e.g. q4 and q6 near q5 = 0, by as much as it allows)."""
         g = self.geometry
         n_poses = T_dh.shape[0]
         centre = wrist_centres(g.wrist, T_dh)

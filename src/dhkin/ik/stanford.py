@@ -29,13 +29,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
-from dhkin.ik.closed_form import Branches
+from dhkin.ik.closed_form import Branches, solve_compiled
 from dhkin.ik.result import ELBOW
 from dhkin.ik.spherical_wrist import (
     GEOMETRY_TOLERANCE,
@@ -45,6 +46,7 @@ from dhkin.ik.spherical_wrist import (
     Wrist,
     abs_cos,
     axis_rotation,
+    compiled_geometry,
     explain_shoulder,
     frame_one_x_point,
     make_shoulder,
@@ -175,8 +177,36 @@ class Solver:
                                    "wrist": wrist_label(front, q5_positive)})
         self.branch_labels: tuple[Mapping[str, str], ...] = tuple(labels)
 
+    @cached_property
+    def _compiled(self) -> tuple[int, NDArray[np.float64]]:
+        """The compiled twin of :meth:`solve` (dhkin.ik.kernels.solve_stanford): its family
+        id and geometry vector."""
+        from dhkin.ik import kernels
+
+        g = self.geometry
+        along_and_offset = np.conj(g.slide) * g.wrist_at_zero
+        arm = (g.wrist_at_zero.real, g.wrist_at_zero.imag, g.slide.real, g.slide.imag,
+               along_and_offset.real, abs(along_and_offset.imag))
+        return kernels.STANFORD, compiled_geometry(g.shoulder, g.wrist, g.flange_zero,
+                                                   g.arm_signs, g.scale, arm)
+
+    def compiled(self) -> tuple[int, NDArray[np.float64]]:
+        """Family id and geometry vector of the compiled solver (dhkin.ik.kernels)."""
+        return self._compiled
+
     def solve(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]) -> Branches:
-        """Principal solutions (N, 8, 6) of flange targets T_dh (N, 4, 4), DH frame 0 -> n."""
+        """Principal solutions (N, 8, 6) of flange targets T_dh (N, 4, 4), DH frame 0 -> n.
+
+        Computed by the compiled twin (dhkin.ik.kernels.solve_stanford) of
+        :meth:`solve_reference`, the vectorised numpy formulation it ports step by step.
+        """
+        return solve_compiled(self, T_dh, q_seed)
+
+    def solve_reference(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]
+                        ) -> Branches:
+        """:meth:`solve` in numpy, vectorised over N: the reference the compiled kernel follows
+        (tests compare the two; they differ by rounding, and where the pose leaves joints
+        ill-conditioned, e.g. q4 and q6 near q5 = 0, by as much as it allows)."""
         g = self.geometry
         n_poses = T_dh.shape[0]
         centre = wrist_centres(g.wrist, T_dh)

@@ -1,0 +1,336 @@
+"""ik_batch and the compiled pipeline: the same answers as ik, chunking, copies, memory.
+
+Speed is measured by scripts/bench_ik.py (docs/benchmarks.md), never asserted here. What is
+checked: ``ik_batch`` returns pose by pose exactly what ``ik`` returns (the same kernels, the same
+order), whatever the chunk size, streamed or not; ``copies=False`` keeps one copy per branch, the
+one nearest to 0; the compiled family solvers agree with their numpy reference formulations;
+the elementary functions of the kernels are accurate to a few ulp; the kernels are safe to call
+from several threads; and a batch of 10^6 poses runs within a bounded amount of memory.
+"""
+
+from __future__ import annotations
+
+import tracemalloc
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dhkin
+from dhkin.errors import IKInputError
+from dhkin.ik import kernels
+from dhkin.ik.result import flag_names
+from dhkin.transforms import pose_error
+
+DATA = Path(__file__).resolve().parent / "data"
+TWO_PI = 2.0 * np.pi
+#: Every robot with a closed-form family: built-in and test tables, both DH conventions.
+ROBOTS = ["abb_irb1200_7_70", "anthropomorphic_arm", "stanford_arm", "ur3", "ur5", "ur10",
+          "aubo_i10", str(DATA / "puma560_modified.yaml"), str(DATA / "puma560_standard.yaml"),
+          str(DATA / "abb_irb1200_7_70_modified.yaml"), str(DATA / "custom_arm_modified.yaml"),
+          str(DATA / "ur3_seed004.yaml")]
+SPECIAL_ANGLES = np.array([0.0, np.pi / 2, -np.pi / 2, np.pi, -np.pi])
+
+
+def pose_set(robot: dhkin.Robot, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """n poses (N, 4, 4): random joint vectors, a quarter at q5 = 0, some at special angles
+    and a few out of reach; and random seeds (N, dof)."""
+    rng = np.random.default_rng(seed)
+    q = robot.table.random_q(n, rng)
+    q[: n // 4, 4] = 0.0
+    special = slice(n // 4, n // 2)
+    for j, joint in enumerate(robot.table.joints):
+        inside = (joint.lower <= SPECIAL_ANGLES) & (joint.upper >= SPECIAL_ANGLES)
+        allowed = SPECIAL_ANGLES[inside]
+        if joint.is_revolute and allowed.size:
+            q[special, j] = rng.choice(allowed, size=n // 2 - n // 4)
+    T = robot.fk(q)
+    T[-5:, :3, 3] += 100.0  # unreachable
+    return np.ascontiguousarray(T), robot.table.random_q(n, rng)
+
+
+@pytest.fixture(scope="module", params=ROBOTS, ids=lambda name: Path(name).stem)
+def robot(request, load_robot) -> dhkin.Robot:
+    return load_robot(request.param)
+
+
+# --------------------------------------------------------------------------------------------
+# ik_batch == ik
+
+
+@pytest.mark.parametrize("copies", [True, False])
+def test_ik_batch_equals_ik_pose_by_pose(robot, copies):
+    """Same solutions, same order, same flags and branches; every one exact."""
+    T, seeds = pose_set(robot, 120, seed=7)
+    batch = robot.ik_batch_detailed(T, seeds, copies=copies)
+    Q, valid = robot.ik_batch(T, seeds, copies=copies)
+    np.testing.assert_array_equal(Q, batch.q)
+    np.testing.assert_array_equal(valid, batch.valid)
+    for i in range(len(T)):
+        solutions = robot.ik(T[i], seeds[i], copies=copies)
+        keep = batch.valid[i]
+        np.testing.assert_array_equal(solutions.q, batch.q[i][keep])
+        assert solutions.flags == tuple(flag_names(f) for f in batch.flags[i][keep])
+        labels = [dict(batch.branch_labels[b]) for b in batch.branch[i][keep]]
+        assert [dict(c.labels) for c in solutions.configurations] == labels
+        turns = np.where([j.is_revolute for j in robot.table.joints],
+                         np.round(solutions.q / TWO_PI), 0).astype(int)
+        assert [c.turns for c in solutions.configurations] == [tuple(t) for t in turns]
+        if len(solutions):
+            assert solutions.residuals.max() <= 1e-9
+            position, rotation = pose_error(robot.fk(solutions.q),
+                                            np.broadcast_to(T[i], (len(solutions), 4, 4)))
+            assert position.max() <= 1e-9 and rotation.max() <= 1e-9
+        else:
+            assert solutions.reason
+    assert not batch.valid[-5:].any()  # the unreachable ones
+
+
+def test_chunk_sizes_and_streaming_give_identical_results(robot):
+    T, seeds = pose_set(robot, 90, seed=8)
+    whole = robot.ik_batch_detailed(T, seeds)
+    for chunk_size in (1, 7, 64):
+        chunked = robot.ik_batch_detailed(T, seeds, chunk_size=chunk_size)
+        for field in ("q", "valid", "flags", "branch"):
+            np.testing.assert_array_equal(getattr(chunked, field), getattr(whole, field))
+    seen = 0
+    for start, part in robot.ik_batch_chunks(T, seeds, chunk_size=13):
+        for k in range(part.q.shape[0]):
+            i = start + k
+            np.testing.assert_array_equal(part.q[k][part.valid[k]], whole.q[i][whole.valid[i]])
+            np.testing.assert_array_equal(part.branch[k][part.valid[k]],
+                                          whole.branch[i][whole.valid[i]])
+        seen += part.q.shape[0]
+    assert seen == len(T)
+
+
+def test_one_copy_per_branch_is_the_copy_nearest_zero(robot):
+    """copies=False: the same branches as copies=True, each the copy with the least |q| (per
+    joint, hence also in sum)."""
+    T, seeds = pose_set(robot, 90, seed=9)
+    every = robot.ik_batch_detailed(T, seeds)
+    one = robot.ik_batch_detailed(T, seeds, copies=False)
+    assert one.q.shape[1] <= len(robot.ik_solver.branch_labels)
+    for i in range(len(T)):
+        branches = one.branch[i][one.valid[i]]
+        assert sorted(branches) == sorted(set(every.branch[i][every.valid[i]]))
+        for b, q in zip(branches, one.q[i][one.valid[i]], strict=True):
+            rows = every.q[i][every.valid[i] & (every.branch[i] == b)]
+            assert np.any(np.all(rows == q, axis=1))  # one of the copies (ties: +-pi)
+            assert np.all(np.abs(q) <= np.abs(rows).min(axis=0))
+
+
+def test_the_copies_are_those_of_the_numpy_expansion(robot):
+    """Generic poses: ik_batch returns, in order, closed_form.expand_turns of the wrapped valid
+    branch solutions (every one exact here), pose by pose; to rounding (the kernels leave a
+    value inside (-pi, pi] as it is where numpy's wrap rounds it, and convert the target to DH
+    frames in their own order of operations)."""
+    from dhkin.ik.closed_form import expand_turns, wrap_revolute
+    from dhkin.transforms import invert
+
+    q = robot.table.random_q(300, np.random.default_rng(16))
+    q = q[np.abs(np.sin(q[:, 4])) > 1e-2]
+    T = robot.table.fk(q)
+    batch = robot.ik_batch_detailed(T)
+    T_dh = invert(robot.table.base) @ T @ invert(robot.table.tool)
+    branches = robot.ik_solver.solve(T_dh, np.zeros_like(q))
+    for i in range(len(q)):
+        principal = wrap_revolute(robot.table, branches.q[i][branches.valid[i]])
+        rows, values = expand_turns(robot.table, principal)
+        np.testing.assert_allclose(batch.q[i][batch.valid[i]], values, rtol=0, atol=1e-11)
+        np.testing.assert_array_equal(batch.branch[i][batch.valid[i]],
+                                      np.flatnonzero(branches.valid[i])[rows])
+
+
+# --------------------------------------------------------------------------------------------
+# Compiled family solvers and their numpy references
+
+
+def test_compiled_solver_follows_the_numpy_reference(robot):
+    """On generic poses (q5 away from 0) both give the same branches, validity and flags, and
+    joint values equal mod 2pi to 1e-9 rad."""
+    rng = np.random.default_rng(10)
+    q = robot.table.random_q(2000, rng)
+    q = q[np.abs(np.sin(q[:, 4])) > 1e-2]
+    T = robot.table.fk(q)
+    from dhkin.transforms import invert
+
+    T_dh = invert(robot.table.base) @ T @ invert(robot.table.tool)
+    seeds = np.zeros_like(q)
+    compiled = robot.ik_solver.solve(T_dh, seeds)
+    reference = robot.ik_solver.solve_reference(T_dh, seeds)
+    np.testing.assert_array_equal(compiled.valid, reference.valid)
+    np.testing.assert_array_equal(compiled.flags, reference.flags)
+    both = compiled.valid & reference.valid
+    gap = np.abs(np.mod(compiled.q - reference.q + np.pi, TWO_PI) - np.pi).max(axis=-1)
+    assert gap[both].max() <= 1e-9
+
+
+def test_a_family_without_a_compiled_solver_runs_through_the_numpy_solve(load_robot):
+    """A solver that only has ``solve`` (a third-party family): the pipeline calls it and does
+    the rest in the kernels; on generic poses it agrees with the compiled family."""
+    from dhkin.ik.closed_form import Pipeline
+
+    robot = load_robot("ur5")
+    compiled_solver = robot.ik_solver
+
+    class Plain:
+        """The UR family through its numpy reference only."""
+
+        branch_labels = compiled_solver.branch_labels
+        family = compiled_solver.family
+
+        def solve(self, T_dh, q_seed):
+            return robot.ik_solver.solve_reference(T_dh, q_seed)
+
+        def explain(self, T_dh):
+            return robot.ik_solver.explain(T_dh)
+
+    pipeline = Pipeline(Plain(), robot.table)
+    assert not pipeline.compiled
+    q = robot.table.random_q(200, np.random.default_rng(18))
+    q = q[np.abs(np.sin(q[:, 4])) > 1e-2]
+    T = np.concatenate([robot.fk(q), robot.fk(q[:2])])
+    T[-2:, :3, 3] += 100.0  # unreachable
+    for copies in (True, False):
+        plain = pipeline.solve_batch(T, copies=copies, chunk_size=37)
+        compiled = robot.ik_batch_detailed(T, copies=copies)
+        np.testing.assert_array_equal(plain.valid, compiled.valid)
+        np.testing.assert_array_equal(plain.branch, compiled.branch)
+        np.testing.assert_allclose(plain.q, compiled.q, rtol=0, atol=1e-9)
+    for i in (0, 1, len(T) - 1):
+        one = pipeline.solve_one(T[i])
+        np.testing.assert_allclose(one.q, robot.ik(T[i]).q, rtol=0, atol=1e-9)
+        assert len(one) == 0 and one.reason if i == len(T) - 1 else one.residuals.max() <= 1e-9
+
+
+# --------------------------------------------------------------------------------------------
+# Elementary functions of the kernels
+
+
+def test_sincos_within_a_few_ulp_and_the_c_library_beyond_its_range():
+    rng = np.random.default_rng(11)
+    x = np.concatenate([rng.uniform(-20, 20, 200_000), np.arange(-16, 17) * np.pi / 4,
+                        [0.0, -0.0, 1e-300, -1e-300, 5e-324, 1e6, -3e7, 1e300]])
+    out = np.empty((len(x), 2))
+    kernels.sincos_array(x, out)
+    np.testing.assert_allclose(out[:, 0], np.sin(x), rtol=0, atol=4.5e-16)
+    np.testing.assert_allclose(out[:, 1], np.cos(x), rtol=0, atol=4.5e-16)
+    special = np.array([np.nan, np.inf, -np.inf])
+    out = np.empty((3, 2))
+    kernels.sincos_array(special, out)
+    assert np.isnan(out).all()
+
+
+def test_atan2_within_a_few_ulp_and_exact_at_zeros_and_infinities():
+    rng = np.random.default_rng(12)
+    magnitude = 10.0 ** rng.uniform(-300, 300, (2, 200_000))
+    y = rng.choice([-1.0, 1.0], 200_000) * magnitude[0] * rng.uniform(0, 1, 200_000)
+    x = rng.choice([-1.0, 1.0], 200_000) * magnitude[1] * rng.uniform(0, 1, 200_000)
+    y = np.concatenate([y, rng.normal(size=100_000), [1.0, -1.0, 1.0, -1.0, 3.0, 3.0]])
+    x = np.concatenate([x, rng.normal(size=100_000), [1.0, 1.0, -1.0, -1.0, 3.0, -3.0]])
+    out = np.empty(len(x))
+    kernels.atan2_array(y, x, out)
+    reference = np.arctan2(y, x)
+    assert np.all(np.abs(out - reference) <= 2.5 * np.spacing(np.abs(reference)) + 1e-300)
+    values = np.array([0.0, -0.0, 1.0, -1.0, np.inf, -np.inf, np.nan])
+    ys, xs = (a.ravel() for a in np.meshgrid(values, values))
+    out = np.empty(len(xs))
+    kernels.atan2_array(ys, xs, out)
+    np.testing.assert_array_equal(out, np.arctan2(ys, xs))
+    assert np.signbit(out).tolist() == np.signbit(np.arctan2(ys, xs)).tolist()
+
+
+# --------------------------------------------------------------------------------------------
+# Threads, input errors
+
+
+def test_threads_get_the_same_answers(load_robot):
+    """The kernels release the GIL and robot.ik keeps its buffers per thread."""
+    robot = load_robot("ur5")
+    T, seeds = pose_set(robot, 200, seed=13)
+    expected = [robot.ik(T[i], seeds[i]).q for i in range(len(T))]
+    with ThreadPoolExecutor(4) as pool:
+        got = list(pool.map(lambda i: robot.ik(T[i], seeds[i]).q, range(len(T))))
+        batches = list(pool.map(lambda part: robot.ik_batch(T[part], seeds[part]),
+                                [slice(0, 100), slice(100, 200)]))
+    for a, b in zip(expected, got, strict=True):
+        np.testing.assert_array_equal(a, b)
+    for part, (Q, valid) in zip((slice(0, 100), slice(100, 200)), batches, strict=True):
+        for k, i in enumerate(range(part.start, part.stop)):
+            np.testing.assert_array_equal(Q[k][valid[k]], expected[i])
+
+
+def test_bad_inputs_name_the_pose(load_robot):
+    robot = load_robot("abb_irb1200_7_70")
+    T = robot.fk(robot.table.random_q(40, np.random.default_rng(14)))
+    bad = T.copy()
+    bad[33, :3, :3] *= 2.0
+    with pytest.raises(IKInputError, match=r"T\[33\]: rotation block is not a rotation"):
+        robot.ik_batch(bad)
+    with pytest.raises(IKInputError, match=r"T\[33\]: rotation block is not a rotation"):
+        list(robot.ik_batch_chunks(bad, chunk_size=10))
+    bad[5, 0, 0] = np.nan
+    with pytest.raises(IKInputError, match="finite"):
+        robot.ik_batch(bad, chunk_size=3)
+    with pytest.raises(IKInputError, match="finite"):
+        robot.ik(bad[5])
+    with pytest.raises(IKInputError, match="q_seed"):
+        robot.ik(T[0], q_seed=np.full(6, np.inf))
+    with pytest.raises(IKInputError, match="q_seed"):
+        robot.ik(T[0], q_seed=np.zeros(5))
+    with pytest.raises(IKInputError, match="chunk_size"):
+        robot.ik_batch(T, chunk_size=0)
+    assert robot.ik_batch(T[0])[0].shape[0] == 1  # one pose as a batch of one
+
+
+# --------------------------------------------------------------------------------------------
+# Memory
+
+
+def test_a_million_poses_run_within_bounded_memory(load_robot):
+    """10^6 IRB 1200 poses: streamed chunk by chunk with every copy, and as one dense batch of
+    one solution per branch. Peak memory traced (numpy allocations) during each, no timing."""
+    robot = load_robot("abb_irb1200_7_70")
+    unique = robot.fk(robot.table.random_q(1000, np.random.default_rng(15)))
+    T = np.tile(unique, (1000, 1, 1))  # (10^6, 4, 4), 128 MB, before tracing starts
+    per_pose = robot.ik_batch(unique)[1].sum(axis=1)
+    tracemalloc.start()
+    try:
+        total = 0
+        for start, part in robot.ik_batch_chunks(T):
+            total += int(part.valid.sum())
+            rows = (start + np.arange(part.q.shape[0])) % len(unique)
+            np.testing.assert_array_equal(part.valid.sum(axis=1), per_pose[rows])
+        _, streamed_peak = tracemalloc.get_traced_memory()
+        tracemalloc.reset_peak()
+        Q, _ = robot.ik_batch(T, copies=False)
+        _, dense_peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert total == int(per_pose.sum()) * 1000
+    print(f"\n10^6 poses: streamed peak {streamed_peak / 2**20:.0f} MiB, dense (copies=False) "
+          f"peak {dense_peak / 2**20:.0f} MiB for a {Q.nbytes / 2**20:.0f} MiB result")
+    assert streamed_peak < 128 * 2**20
+    n_branches = len(robot.ik_solver.branch_labels)
+    result = len(T) * n_branches * (8 * robot.dof + 4)  # q, valid, flags, branch: B wide
+    assert dense_peak < result + 64 * 2**20
+
+
+def test_streaming_a_ur_arm_with_every_copy_stays_small(load_robot):
+    """UR5: 256 and more solutions per pose with every copy; 10^5 poses streamed with the default
+    chunk size hold about 64 MiB of results at a time (the dense result would be ~1.2 GiB)."""
+    robot = load_robot("ur5")
+    unique = robot.fk(robot.table.random_q(1000, np.random.default_rng(17)))
+    T = np.tile(unique, (100, 1, 1))
+    tracemalloc.start()
+    try:
+        total = sum(int(part.valid.sum()) for _, part in robot.ik_batch_chunks(T))
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert total == int(robot.ik_batch(unique)[1].sum()) * 100
+    print(f"\n10^5 UR5 poses, every copy ({total / len(T):.0f} per pose), streamed: peak "
+          f"{peak / 2**20:.0f} MiB")
+    assert peak < 128 * 2**20

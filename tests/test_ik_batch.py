@@ -262,6 +262,33 @@ def test_threads_get_the_same_answers(load_robot):
             np.testing.assert_array_equal(Q[k][valid[k]], expected[i])
 
 
+def test_ik_takes_any_array_layout_through_the_compiled_entry_point(load_robot):
+    """robot.ik calls kernels.solve_one's compiled entry point, which trusts its argument types:
+    lists, Fortran order, strided views, read-only and integer arrays must be converted first
+    and give the answers of the plain call."""
+    robot = load_robot("ur5")
+    pipeline = robot._ik_pipeline
+    assert pipeline._one_kernel is not kernels.solve_one  # the fast path is in use
+    q = robot.table.random_q(50, np.random.default_rng(19))
+    T = robot.fk(q)
+    for i in range(len(T)):
+        expected = robot.ik(np.ascontiguousarray(T[i]), q[i])
+        wide = np.zeros((8, 8))
+        wide[::2, ::2] = T[i]
+        frozen = np.array(T[i])
+        frozen.flags.writeable = False
+        seeds = (q[i].tolist(), np.repeat(q[i], 2)[::2], np.asfortranarray(q[i]))
+        targets = (T[i].tolist(), np.asfortranarray(T[i]), wide[::2, ::2], frozen)
+        for target, seed in zip(targets, (*seeds, q[i]), strict=True):
+            got = robot.ik(target, seed)
+            np.testing.assert_array_equal(got.q, expected.q)
+            np.testing.assert_array_equal(got.residuals, expected.residuals)
+            assert got.configurations == expected.configurations
+    integer_pose = np.eye(4, dtype=np.int64)
+    integer_pose[:3, 3] = (1, 0, 0)  # out of reach: an empty answer, not a type error
+    assert len(robot.ik(integer_pose)) == 0
+
+
 def test_bad_inputs_name_the_pose(load_robot):
     robot = load_robot("abb_irb1200_7_70")
     T = robot.fk(robot.table.random_q(40, np.random.default_rng(14)))
@@ -276,9 +303,10 @@ def test_bad_inputs_name_the_pose(load_robot):
         robot.ik_batch(bad, chunk_size=3)
     with pytest.raises(IKInputError, match="finite"):
         robot.ik(bad[5])
-    with pytest.raises(IKInputError, match="q_seed"):
+    with pytest.raises(IKInputError, match=r"q_seed: expected finite values, got .*inf"):
         robot.ik(T[0], q_seed=np.full(6, np.inf))
-    with pytest.raises(IKInputError, match="q_seed"):
+    with pytest.raises(IKInputError,
+                       match=r"q_seed: expected shape \(6,\) for one pose, got \(5,\)"):
         robot.ik(T[0], q_seed=np.zeros(5))
     with pytest.raises(IKInputError, match="chunk_size"):
         robot.ik_batch(T, chunk_size=0)

@@ -29,9 +29,10 @@ return principal solutions only.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import threading
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType, ModuleType
 from typing import Protocol
@@ -482,44 +483,69 @@ class Pipeline:
                   tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
                   copies: bool = True) -> IKSolutions:
         """Every solution of one pose (4, 4), with configurations, flags, residuals and, when
-        there is none, the reason. One kernel call; buffers are kept per thread."""
-        target = np.asarray(T, dtype=np.float64)
+        there is none, the reason. One kernel call, made through its compiled entry point
+        (:meth:`_one_kernel`); buffers are kept per thread."""
+        target = np.ascontiguousarray(T, dtype=np.float64)
         if target.shape != (4, 4):
-            raise IKInputError(f"T: expected a (4, 4) pose, got shape {target.shape}")
+            raise IKInputError(f"T: expected a (4, 4) pose, got shape {np.shape(T)}")
         if self.plan is None:
             return self._solve_one_numpy(target, q_seed, tolerance, tcp, copies)
-        if not target.flags.c_contiguous:
-            target = np.ascontiguousarray(target)
         if q_seed is None:
             seed = self._zero_seed
         else:
-            seed = np.asarray(q_seed, dtype=np.float64)
+            seed = np.ascontiguousarray(q_seed, dtype=np.float64)
             if seed.shape != (self.dof,):
-                as_seeds(seed[None], 1, self.dof)  # raises the shape error
-            if not seed.flags.c_contiguous:
-                seed = np.ascontiguousarray(seed)
+                raise IKInputError(f"q_seed: expected shape ({self.dof},) for one pose, got "
+                                   f"{np.shape(q_seed)}")
         tolerances = self._tolerances.get(tolerance)
         if tolerances is None:
             tolerances = self.tolerances(tolerance)
         try:
             out_q, out_errors, out_keys, scratch = self._buffers.arrays
         except AttributeError:  # first call in this thread
-            out_q = np.empty((self.max_solutions, self.dof))
-            out_errors = np.empty((self.max_solutions, 2))
-            out_keys = np.empty(self.max_solutions, np.int64)
-            scratch = np.empty(self.kernels.one_scratch_size(self.dof, self.n_branches))
-            self._buffers.arrays = out_q, out_errors, out_keys, scratch
-        count = self.kernels.solve_one(self.plan, self.frames if tcp is None else
-                                       self.frames_for(tcp), target, seed, tolerances, copies,
-                                       out_q, out_errors, out_keys, scratch)
+            out_q, out_errors, out_keys, scratch = self._one_buffers()
+        # Every argument has the exact type the entry point was compiled for: C-contiguous
+        # float64 arrays of the right dimensions (target and seed just above), a bool.
+        count = self._one_kernel(self.plan, self.frames if tcp is None else self.frames_for(tcp),
+                                 target, seed, tolerances, bool(copies), out_q,
+                                 out_errors, out_keys, scratch)
         if count <= 0:
             return self._no_solution(count, target, seed, tcp)
-        q = out_q[:count].copy()
         keys = out_keys[:count]
         described = self._descriptions.get(keys.tobytes())
+        q = out_q[:count].copy()
         if described is None:
             described = self._describe(keys, q)
         return _solutions(q, described[0], described[1], out_errors[:count].copy(), self.family)
+
+    def _one_buffers(self) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                    NDArray[np.int64], NDArray[np.float64]]:
+        """This thread's output and scratch arrays of kernels.solve_one."""
+        arrays = (np.empty((self.max_solutions, self.dof)), np.empty((self.max_solutions, 2)),
+                  np.empty(self.max_solutions, np.int64),
+                  np.empty(self.kernels.one_scratch_size(self.dof, self.n_branches)))
+        self._buffers.arrays = arrays
+        return arrays
+
+    @functools.cached_property
+    def _one_kernel(self) -> Callable[..., int]:
+        """kernels.solve_one's compiled entry point for this pipeline's argument types.
+
+        Calling a numba dispatcher resolves the type of every argument first: with solve_one's
+        ten arguments that is about 1 us, a sixth of a single-pose solve. The entry point skips
+        it, so it must only get arguments of the types it was compiled for (solve_one makes
+        sure). Compiles (or loads from the cache) by one call on the identity pose. Where numba
+        does not expose the entry point, the dispatcher is used."""
+        kernel = self.kernels.solve_one
+        args = (self.plan, self.frames, np.eye(4), self._zero_seed,
+                self.tolerances(DEFAULT_TOLERANCE), True, *self._one_buffers())
+        kernel(*args)
+        try:
+            from numba import typeof
+
+            return kernel.overloads[tuple(typeof(arg) for arg in args)].entry_point
+        except (AttributeError, KeyError, TypeError):  # another numba: the plain dispatcher
+            return kernel
 
     def _describe(self, keys: NDArray[np.int64], q: NDArray[np.float64]
                   ) -> tuple[tuple[Configuration, ...], tuple[frozenset[str], ...]]:
@@ -556,7 +582,7 @@ class Pipeline:
         """solve_one's answer for a kernel count <= 0: an input error, or no solution."""
         kernels = self.kernels
         if count == -kernels.STATUS_BAD_SEED:
-            as_seeds(seed[None], 1, self.dof)  # raises the finiteness error
+            raise IKInputError(f"q_seed: expected finite values, got {seed.tolist()}")
         if count == kernels.NEEDS_MORE_ROWS:  # cannot happen: max_solutions counts every copy
             raise RuntimeError("IK expansion: more solutions than counted")
         if count < 0:
@@ -606,20 +632,29 @@ def _plain_dataclass(cls: type) -> bool:
             and all(f.init for f in dataclasses.fields(cls)))
 
 
-_FAST_SOLUTIONS = _plain_dataclass(IKSolutions)
+#: Fields of IKSolutions a successful solve_one leaves at their class-level defaults.
+_DEFAULTED = {"reason": "", "numerical": False}
+_FAST_SOLUTIONS = _plain_dataclass(IKSolutions) and all(
+    getattr(IKSolutions, name, None) == value for name, value in _DEFAULTED.items())
 
 
 def _solutions(q: NDArray[np.float64], configurations: tuple[Configuration, ...],
                flags: tuple[frozenset[str], ...], residuals: NDArray[np.float64],
                family: str) -> IKSolutions:
     """IKSolutions of a successful solve_one, built without the frozen dataclass's field by
-    field __init__ where that is equivalent (it is a third of the single-pose overhead)."""
+    field __init__ where that is equivalent (it is a third of the single-pose overhead): the
+    fields with a class-level default equal to the value here (reason "", numerical False)
+    are read from the class, as attributes of any dataclass with defaults are."""
     if not _FAST_SOLUTIONS:
         return IKSolutions(q=q, configurations=configurations, flags=flags, residuals=residuals,
                            family=family)
     result = object.__new__(IKSolutions)
-    result.__dict__.update(q=q, configurations=configurations, flags=flags,
-                           residuals=residuals, reason="", family=family, numerical=False)
+    fields = result.__dict__
+    fields["q"] = q
+    fields["configurations"] = configurations
+    fields["flags"] = flags
+    fields["residuals"] = residuals
+    fields["family"] = family
     return result
 
 

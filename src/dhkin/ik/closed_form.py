@@ -501,9 +501,14 @@ class Pipeline:
         if tolerances is None:
             tolerances = self.tolerances(tolerance)
         try:
-            out_q, out_errors, out_keys, scratch = self._buffers.arrays
+            shared_q, shared_errors, out_keys, scratch = self._buffers.arrays
         except AttributeError:  # first call in this thread
-            out_q, out_errors, out_keys, scratch = self._one_buffers()
+            shared_q, shared_errors, out_keys, scratch = self._one_buffers()
+        if copies:  # up to max_solutions rows: into this thread's buffers, then copied out
+            out_q, out_errors = shared_q, shared_errors
+        else:  # at most one row per branch: new arrays that the result keeps (no copy)
+            out_q = np.empty((self.n_branches, self.dof))
+            out_errors = np.empty((self.n_branches, 2))
         # Every argument has the exact type the entry point was compiled for: C-contiguous
         # float64 arrays of the right dimensions (target and seed just above), a bool.
         count = self._one_kernel(self.plan, self.frames if tcp is None else self.frames_for(tcp),
@@ -513,10 +518,15 @@ class Pipeline:
             return self._no_solution(count, target, seed, tcp)
         keys = out_keys[:count]
         described = self._descriptions.get(keys.tobytes())
-        q = out_q[:count].copy()
+        if copies:
+            q, residuals = out_q[:count].copy(), out_errors[:count].copy()
+        elif count < self.n_branches:
+            q, residuals = out_q[:count], out_errors[:count]
+        else:
+            q, residuals = out_q, out_errors
         if described is None:
             described = self._describe(keys, q)
-        return _solutions(q, described[0], described[1], out_errors[:count].copy(), self.family)
+        return _solutions(q, described[0], described[1], residuals, self.family)
 
     def _one_buffers(self) -> tuple[NDArray[np.float64], NDArray[np.float64],
                                     NDArray[np.int64], NDArray[np.float64]]:

@@ -16,6 +16,16 @@ docs/benchmarks.md for the time) and load from the cache afterwards.
 Kernels allocate nothing per pose: callers pass preallocated outputs, so memory is the inputs,
 the outputs and a few scratch arrays per call. Every kernel releases the GIL (``nogil``).
 
+Two forms of the same computation: the per-pose functions (the families' ``solve_*``,
+:func:`_finish_pose`, used by :func:`solve_one`, :func:`solve_branches`, :func:`finish_principal`
+for other chains) and the block functions of the batch path (:func:`solve_principal`): the
+spherical-wrist and offset-wrist solvers (:func:`_spherical_block`, :func:`_offset_block`) and the
+wrap and FK check (:func:`_finish_block`) run by blocks of :data:`BLOCK_POSES` poses, stage by
+stage over lanes (a pose, or one of its branches; structure of arrays), in loops without branches
+or calls that the compiler vectorises (4 lanes with AVX2). Both forms do the same floating-point
+operations in the same order (atan2 and sincos: :func:`_atan2_lanes`, :func:`_sincos_lanes`), so
+they give the same bits: ``tests/test_ik_batch.py`` checks ``ik_batch`` against ``ik``.
+
 Layouts (built by :func:`chain_array`, :func:`arm_geometry` and :func:`offset_wrist_geometry`):
 
 * ``chain`` (n, 8): per joint a, cos(alpha), sin(alpha), d, theta, direction, offset,
@@ -187,21 +197,83 @@ def atan2(y: float, x: float) -> float:
     signed zeros, infinities and NaN (those inputs go to it). Reduction to t = min/max of
     |x|, |y| in [0, 1], then atan(t) = atan(k/8) + atan((t - k/8) / (1 + t k/8))."""
     ax, ay = abs(x), abs(y)
-    swap = ay > ax
-    numerator = ax if swap else ay
-    denominator = ay if swap else ax
+    denominator = ay if ay > ax else ax
+    numerator = ax if ay > ax else ay
     if not (denominator > 0.0 and denominator < math.inf and numerator == numerator):
         return math.atan2(y, x)
-    t = numerator / denominator
-    k = (t * 8.0 + _ROUNDER) - _ROUNDER
+    k = _atan_knot(numerator / denominator)
+    return _atan2_finish(y, x, _ATAN_TABLE[int(k)], k, numerator / denominator)
+
+
+@_jit_fma
+def _atan_knot(t: float) -> float:
+    """k of :func:`atan2`'s reduction: t * 8 rounded to an integer (0..8 for t in [0, 1])."""
+    return (t * 8.0 + _ROUNDER) - _ROUNDER
+
+
+@_jit_fma
+def _atan2_finish(y: float, x: float, base: float, k: float, t: float) -> float:
+    """atan2(y, x) from t = min/max of |x|, |y|, its knot k and base = atan(k / 8) (the one
+    body of :func:`atan2` and :func:`_atan2_lane`)."""
     centre = k * 0.125
     u = (t - centre) / (1.0 + t * centre)
     u2 = u * u
-    a = _ATAN_TABLE[int(k)] + (u + u * u2 * (_A3 + u2 * (_A5 + u2 * (_A7 + u2 * (
+    a = base + (u + u * u2 * (_A3 + u2 * (_A5 + u2 * (_A7 + u2 * (
         _A9 + u2 * (_A11 + u2 * (_A13 + u2 * _A15)))))))
-    a = HALF_PI - a if swap else a
+    a = HALF_PI - a if abs(y) > abs(x) else a
     a = math.pi - a if x < 0.0 else a
     return math.copysign(a, y)
+
+
+_ATAN_0, _ATAN_1, _ATAN_2, _ATAN_3, _ATAN_4, _ATAN_5, _ATAN_6, _ATAN_7, _ATAN_8 = (
+    float(v) for v in _ATAN_TABLE)
+
+
+@_jit_fma
+def _atan2_lane(y: float, x: float) -> tuple[float, bool]:
+    """(:func:`atan2` (y, x), False), or (anything, True) for the inputs atan2 passes to the C
+    library; by selects, with the table of atan(k / 8) as constants (no gather): the compiler
+    vectorises loops calling it (see :func:`_atan2_lanes`)."""
+    ax, ay = abs(x), abs(y)
+    denominator = ay if ay > ax else ax
+    numerator = ax if ay > ax else ay
+    special = not (denominator > 0.0 and denominator < math.inf and numerator == numerator)
+    t = numerator / denominator
+    k = _atan_knot(t)
+    base = (_ATAN_0 if k < 0.5 else _ATAN_1 if k < 1.5 else _ATAN_2 if k < 2.5 else
+            _ATAN_3 if k < 3.5 else _ATAN_4 if k < 4.5 else _ATAN_5 if k < 5.5 else
+            _ATAN_6 if k < 6.5 else _ATAN_7 if k < 7.5 else _ATAN_8)
+    return _atan2_finish(y, x, base, k, t), special
+
+
+@_jit
+def _atan2_lanes(y: NDArray[np.float64], x: NDArray[np.float64],
+                 out: NDArray[np.float64]) -> None:
+    """out = :func:`atan2` (y, x) elementwise (M,), in a loop the compiler vectorises; the rare
+    inputs of the C library's atan2 are passed to it afterwards."""
+    special = 0
+    for k in range(out.shape[0]):
+        value, odd = _atan2_lane(y[k], x[k])
+        out[k] = value
+        special += 1 if odd else 0
+    if special > 0:
+        for k in range(out.shape[0]):
+            out[k] = atan2(y[k], x[k])
+
+
+@_jit
+def _sincos_lanes(theta: NDArray[np.float64], sine: NDArray[np.float64],
+                  cosine: NDArray[np.float64]) -> None:
+    """:func:`sincos` of every theta (M,): :func:`_sincos_map` (the same values), then
+    sincos itself where |theta| >= 2^19, inf or NaN."""
+    _sincos_map(theta, sine, cosine)
+    far = 0
+    for k in range(theta.shape[0]):
+        far += 0 if abs(theta[k]) < _REDUCTION_LIMIT else 1
+    if far > 0:
+        for k in range(theta.shape[0]):
+            if not abs(theta[k]) < _REDUCTION_LIMIT:
+                sine[k], cosine[k] = sincos(theta[k])
 
 
 @_jit
@@ -249,21 +321,36 @@ def _sincos_map(theta: NDArray[np.float64], sine: NDArray[np.float64],
 def target_status(T: NDArray[np.float64]) -> int:
     """0 for a usable pose (4, 4); STATUS_NOT_FINITE, or STATUS_NOT_ROTATION when the rotation
     block is not orthonormal within ORTHOGONALITY_TOLERANCE or has det < 0."""
-    for r in range(4):
-        for c in range(4):
-            if not math.isfinite(T[r, c]):
-                return STATUS_NOT_FINITE
-    worst = 0.0
-    for r in range(3):
-        for c in range(r, 3):
-            dot = T[r, 0] * T[c, 0] + T[r, 1] * T[c, 1] + T[r, 2] * T[c, 2]
-            worst = max(worst, abs(dot - (1.0 if r == c else 0.0)))
-    det = (T[0, 0] * (T[1, 1] * T[2, 2] - T[1, 2] * T[2, 1])
-           - T[0, 1] * (T[1, 0] * T[2, 2] - T[1, 2] * T[2, 0])
-           + T[0, 2] * (T[1, 0] * T[2, 1] - T[1, 1] * T[2, 0]))
-    if worst > ORTHOGONALITY_TOLERANCE or det < 0.0:
-        return STATUS_NOT_ROTATION
-    return 0
+    return _status_of(_pose_entries(T))
+
+
+@_jit
+def _pose_entries(T: NDArray[np.float64]) -> tuple[float, ...]:
+    """The 16 entries of a pose (4, 4), row by row."""
+    return (T[0, 0], T[0, 1], T[0, 2], T[0, 3], T[1, 0], T[1, 1], T[1, 2], T[1, 3],
+            T[2, 0], T[2, 1], T[2, 2], T[2, 3], T[3, 0], T[3, 1], T[3, 2], T[3, 3])
+
+
+@_jit
+def _status_of(t: tuple[float, ...]) -> int:
+    """:func:`target_status` of a pose's 16 entries, row by row (by selects: no branches)."""
+    t00, t01, t02, t03, t10, t11, t12, t13, t20, t21, t22, t23, t30, t31, t32, t33 = t
+    finite = ((abs(t00) < math.inf) & (abs(t01) < math.inf) & (abs(t02) < math.inf)
+              & (abs(t03) < math.inf) & (abs(t10) < math.inf) & (abs(t11) < math.inf)
+              & (abs(t12) < math.inf) & (abs(t13) < math.inf) & (abs(t20) < math.inf)
+              & (abs(t21) < math.inf) & (abs(t22) < math.inf) & (abs(t23) < math.inf)
+              & (abs(t30) < math.inf) & (abs(t31) < math.inf) & (abs(t32) < math.inf)
+              & (abs(t33) < math.inf))
+    worst = max(abs(t00 * t00 + t01 * t01 + t02 * t02 - 1.0),
+                abs(t00 * t10 + t01 * t11 + t02 * t12),
+                abs(t00 * t20 + t01 * t21 + t02 * t22),
+                abs(t10 * t10 + t11 * t11 + t12 * t12 - 1.0),
+                abs(t10 * t20 + t11 * t21 + t12 * t22),
+                abs(t20 * t20 + t21 * t21 + t22 * t22 - 1.0))
+    det = (t00 * (t11 * t22 - t12 * t21) - t01 * (t10 * t22 - t12 * t20)
+           + t02 * (t10 * t21 - t11 * t20))
+    rotation = (worst <= ORTHOGONALITY_TOLERANCE) & (det >= 0.0)
+    return 0 if finite and rotation else STATUS_NOT_FINITE if not finite else STATUS_NOT_ROTATION
 
 
 @_jit
@@ -278,14 +365,60 @@ def dh_target(frames: NDArray[np.float64], T: NDArray[np.float64],
               out: NDArray[np.float64]) -> None:
     """out (3, 4) = top rows of frames[0] @ T @ frames[1] (T rigid): DH frame 0 -> n."""
     B, F = frames[0], frames[1]
+    t = _pose_entries(T)
+    f = _pose_entries(F)
     for r in range(3):
-        m0 = B[r, 0] * T[0, 0] + B[r, 1] * T[1, 0] + B[r, 2] * T[2, 0]
-        m1 = B[r, 0] * T[0, 1] + B[r, 1] * T[1, 1] + B[r, 2] * T[2, 1]
-        m2 = B[r, 0] * T[0, 2] + B[r, 1] * T[1, 2] + B[r, 2] * T[2, 2]
-        m3 = B[r, 0] * T[0, 3] + B[r, 1] * T[1, 3] + B[r, 2] * T[2, 3] + B[r, 3]
-        for c in range(4):
-            out[r, c] = m0 * F[0, c] + m1 * F[1, c] + m2 * F[2, c]
-        out[r, 3] += m3
+        out[r, 0], out[r, 1], out[r, 2], out[r, 3] = _dh_row(B[r, 0], B[r, 1], B[r, 2],
+                                                             B[r, 3], f, t)
+
+
+@_jit
+def _dh_row(b0: float, b1: float, b2: float, b3: float, f: tuple[float, ...],
+            t: tuple[float, ...]) -> tuple[float, float, float, float]:
+    """Row (b0, b1, b2, b3) of frames[0] times the rigid pose t times frames[1] (f): entries of
+    :func:`dh_target`'s output, row by row."""
+    t00, t01, t02, t03, t10, t11, t12, t13, t20, t21, t22, t23 = t[:12]
+    f00, f01, f02, f03, f10, f11, f12, f13, f20, f21, f22, f23 = f[:12]
+    m0 = b0 * t00 + b1 * t10 + b2 * t20
+    m1 = b0 * t01 + b1 * t11 + b2 * t21
+    m2 = b0 * t02 + b1 * t12 + b2 * t22
+    m3 = b0 * t03 + b1 * t13 + b2 * t23 + b3
+    return (m0 * f00 + m1 * f10 + m2 * f20, m0 * f01 + m1 * f11 + m2 * f21,
+            m0 * f02 + m1 * f12 + m2 * f22, m0 * f03 + m1 * f13 + m2 * f23 + m3)
+
+
+@_jit
+def _block_poses(frames: NDArray[np.float64], targets: NDArray[np.float64], start: int,
+                 status: NDArray[np.int8], raw: NDArray[np.float64],
+                 block_targets: NDArray[np.float64]) -> None:
+    """:func:`target_status` (status (count,)) and :func:`dh_target` of poses targets[start:
+    start + count] into block_targets (12, W) (rotation column by column, then position; an
+    identity where the status is not 0), in a loop the compiler vectorises. raw: (17, W)."""
+    count, W = status.shape[0], raw.shape[1]
+    for k in range(count):
+        for r in range(4):
+            for c in range(4):
+                raw[4 * r + c, k] = targets[start + k, r, c]
+    B = frames[0]
+    b0, b1, b2 = _pose_entries(B)[0:4], _pose_entries(B)[4:8], _pose_entries(B)[8:12]
+    f = _pose_entries(frames[1])
+    for k in range(W):
+        t = (raw[0, k], raw[1, k], raw[2, k], raw[3, k], raw[4, k], raw[5, k], raw[6, k],
+             raw[7, k], raw[8, k], raw[9, k], raw[10, k], raw[11, k], raw[12, k], raw[13, k],
+             raw[14, k], raw[15, k])
+        raw[16, k] = _status_of(t)
+        o00, o01, o02, o03 = _dh_row(b0[0], b0[1], b0[2], b0[3], f, t)
+        o10, o11, o12, o13 = _dh_row(b1[0], b1[1], b1[2], b1[3], f, t)
+        o20, o21, o22, o23 = _dh_row(b2[0], b2[1], b2[2], b2[3], f, t)
+        block_targets[0, k], block_targets[1, k], block_targets[2, k] = o00, o10, o20
+        block_targets[3, k], block_targets[4, k], block_targets[5, k] = o01, o11, o21
+        block_targets[6, k], block_targets[7, k], block_targets[8, k] = o02, o12, o22
+        block_targets[9, k], block_targets[10, k], block_targets[11, k] = o03, o13, o23
+    for k in range(count):
+        status[k] = int(raw[16, k])
+        if status[k] != 0:  # a harmless target for the block functions
+            for row in range(12):
+                block_targets[row, k] = 1.0 if row == 0 or row == 4 or row == 8 else 0.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -297,21 +430,64 @@ def _pose_error(state: NDArray[np.float64], T: NDArray[np.float64]) -> tuple[flo
     """(position error, s, c) of the FK state (x, y, z columns, p: 12 values) against T (3, 4):
     the rotation error is atan2(s, c), s = |vee(E - E^T)| / 2, c = (trace E - 1) / 2 for
     E = R_fk^T R_T."""
-    x0, x1, x2 = state[0], state[1], state[2]
-    y0, y1, y2 = state[3], state[4], state[5]
-    z0, z1, z2 = state[6], state[7], state[8]
-    position = math.sqrt((state[9] - T[0, 3]) ** 2 + (state[10] - T[1, 3]) ** 2
-                         + (state[11] - T[2, 3]) ** 2)
-    e01 = x0 * T[0, 1] + x1 * T[1, 1] + x2 * T[2, 1]
-    e02 = x0 * T[0, 2] + x1 * T[1, 2] + x2 * T[2, 2]
-    e10 = y0 * T[0, 0] + y1 * T[1, 0] + y2 * T[2, 0]
-    e12 = y0 * T[0, 2] + y1 * T[1, 2] + y2 * T[2, 2]
-    e20 = z0 * T[0, 0] + z1 * T[1, 0] + z2 * T[2, 0]
-    e21 = z0 * T[0, 1] + z1 * T[1, 1] + z2 * T[2, 1]
-    trace = (x0 * T[0, 0] + x1 * T[1, 0] + x2 * T[2, 0] + y0 * T[0, 1] + y1 * T[1, 1]
-             + y2 * T[2, 1] + z0 * T[0, 2] + z1 * T[1, 2] + z2 * T[2, 2])
+    return _state_error(state[0], state[1], state[2], state[3], state[4], state[5], state[6],
+                        state[7], state[8], state[9], state[10], state[11],
+                        T[0, 0], T[1, 0], T[2, 0], T[0, 1], T[1, 1], T[2, 1],
+                        T[0, 2], T[1, 2], T[2, 2], T[0, 3], T[1, 3], T[2, 3])
+
+
+@_jit
+def _state_error(x0: float, x1: float, x2: float, y0: float, y1: float, y2: float, z0: float,
+                 z1: float, z2: float, p0: float, p1: float, p2: float, t00: float, t10: float,
+                 t20: float, t01: float, t11: float, t21: float, t02: float, t12: float,
+                 t22: float, t03: float, t13: float, t23: float) -> tuple[float, float, float]:
+    """:func:`_pose_error` on scalars: FK columns x, y, z and position p against the target's
+    entries t_rc (one body for the per-pose and the block verification: the same rounding)."""
+    position = math.sqrt((p0 - t03) ** 2 + (p1 - t13) ** 2 + (p2 - t23) ** 2)
+    e01 = x0 * t01 + x1 * t11 + x2 * t21
+    e02 = x0 * t02 + x1 * t12 + x2 * t22
+    e10 = y0 * t00 + y1 * t10 + y2 * t20
+    e12 = y0 * t02 + y1 * t12 + y2 * t22
+    e20 = z0 * t00 + z1 * t10 + z2 * t20
+    e21 = z0 * t01 + z1 * t11 + z2 * t21
+    trace = (x0 * t00 + x1 * t10 + x2 * t20 + y0 * t01 + y1 * t11
+             + y2 * t21 + z0 * t02 + z1 * t12 + z2 * t22)
     s = 0.5 * math.sqrt((e21 - e12) ** 2 + (e02 - e20) ** 2 + (e10 - e01) ** 2)
     return position, s, 0.5 * (trace - 1.0)
+
+
+@_jit
+def _dh_step(x0: float, x1: float, x2: float, y0: float, y1: float, y2: float, z0: float,
+             z1: float, z2: float, p0: float, p1: float, p2: float, st: float, ct: float,
+             d: float, a: float, ca: float, sa: float,
+             modified: bool) -> tuple[float, float, float, float, float, float, float, float,
+                                      float, float, float, float]:
+    """One joint of the DH product: the frame (x, y, z columns, p) times the joint's transform
+    with sin/cos theta st, ct, offset d, length a and cos/sin alpha ca, sa."""
+    if not modified:  # Rz(theta) Tz(d) Tx(a) Rx(alpha)
+        p0 += d * z0
+        p1 += d * z1
+        p2 += d * z2
+        n0, n1, n2 = ct * x0 + st * y0, ct * x1 + st * y1, ct * x2 + st * y2
+        u0, u1, u2 = ct * y0 - st * x0, ct * y1 - st * x1, ct * y2 - st * x2
+        x0, x1, x2 = n0, n1, n2
+        p0 += a * x0
+        p1 += a * x1
+        p2 += a * x2
+        y0, y1, y2, z0, z1, z2 = (ca * u0 + sa * z0, ca * u1 + sa * z1, ca * u2 + sa * z2,
+                                  ca * z0 - sa * u0, ca * z1 - sa * u1, ca * z2 - sa * u2)
+    else:  # Rx(alpha) Tx(a) Rz(theta) Tz(d)
+        p0 += a * x0
+        p1 += a * x1
+        p2 += a * x2
+        u0, u1, u2 = ca * y0 + sa * z0, ca * y1 + sa * z1, ca * y2 + sa * z2
+        z0, z1, z2 = ca * z0 - sa * y0, ca * z1 - sa * y1, ca * z2 - sa * y2
+        x0, x1, x2, y0, y1, y2 = (ct * x0 + st * u0, ct * x1 + st * u1, ct * x2 + st * u2,
+                                  ct * u0 - st * x0, ct * u1 - st * x1, ct * u2 - st * x2)
+        p0 += d * z0
+        p1 += d * z1
+        p2 += d * z2
+    return x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2
 
 
 @_jit
@@ -330,29 +506,8 @@ def _fk_steps(chain: NDArray[np.float64], modified: bool, q: NDArray[np.float64]
         d = chain[j, C_D] if chain[j, C_REVOLUTE] != 0.0 else (chain[j, C_DIRECTION] * q[j]
                                                                + chain[j, C_OFFSET])
         ca, sa, a = chain[j, C_COS_ALPHA], chain[j, C_SIN_ALPHA], chain[j, C_A]
-        if not modified:  # Rz(theta) Tz(d) Tx(a) Rx(alpha)
-            p0 += d * z0
-            p1 += d * z1
-            p2 += d * z2
-            n0, n1, n2 = ct * x0 + st * y0, ct * x1 + st * y1, ct * x2 + st * y2
-            u0, u1, u2 = ct * y0 - st * x0, ct * y1 - st * x1, ct * y2 - st * x2
-            x0, x1, x2 = n0, n1, n2
-            p0 += a * x0
-            p1 += a * x1
-            p2 += a * x2
-            y0, y1, y2, z0, z1, z2 = (ca * u0 + sa * z0, ca * u1 + sa * z1, ca * u2 + sa * z2,
-                                      ca * z0 - sa * u0, ca * z1 - sa * u1, ca * z2 - sa * u2)
-        else:  # Rx(alpha) Tx(a) Rz(theta) Tz(d)
-            p0 += a * x0
-            p1 += a * x1
-            p2 += a * x2
-            u0, u1, u2 = ca * y0 + sa * z0, ca * y1 + sa * z1, ca * y2 + sa * z2
-            z0, z1, z2 = ca * z0 - sa * y0, ca * z1 - sa * y1, ca * z2 - sa * y2
-            x0, x1, x2, y0, y1, y2 = (ct * x0 + st * u0, ct * x1 + st * u1, ct * x2 + st * u2,
-                                      ct * u0 - st * x0, ct * u1 - st * x1, ct * u2 - st * x2)
-            p0 += d * z0
-            p1 += d * z1
-            p2 += d * z2
+        x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2 = _dh_step(
+            x0, x1, x2, y0, y1, y2, z0, z1, z2, p0, p1, p2, st, ct, d, a, ca, sa, modified)
         out = states[j + 1]
         out[0], out[1], out[2], out[3], out[4], out[5] = x0, x1, x2, y0, y1, y2
         out[6], out[7], out[8], out[9], out[10], out[11] = z0, z1, z2, p0, p1, p2
@@ -444,17 +599,23 @@ def _verify_branches(chain: NDArray[np.float64], modified: bool, q: NDArray[np.f
 
 
 @_jit
+def _fmod_two_pi(x: float) -> float:
+    """np.fmod(x, 2 pi), the same value, without the library call for |x| < 4 pi (there
+    x - 2 pi is exact: Sterbenz)."""
+    size = abs(x)
+    if size < TWO_PI:
+        return x
+    if size < 2.0 * TWO_PI:
+        return x - TWO_PI if x > 0.0 else -(size - TWO_PI)  # the sign of x, also for 0
+    return np.fmod(x, TWO_PI)
+
+
+@_jit
 def wrap(value: float) -> float:
     """value wrapped to (-pi, pi], as ``pi - np.mod(pi - value, 2 pi)`` (unchanged inside)."""
     if -math.pi < value <= math.pi:
         return value
-    r = np.fmod(math.pi - value, TWO_PI)
-    if r != 0.0:
-        if r < 0.0:
-            r += TWO_PI
-    else:
-        r = 0.0
-    return math.pi - r
+    return _wrap_angle(value)
 
 
 @_jit
@@ -693,6 +854,286 @@ def solve_stanford(g: NDArray[np.float64], T: NDArray[np.float64],
 
 
 # --------------------------------------------------------------------------------------------
+# The spherical-wrist family by blocks of poses: the same operations as solve_spherical_wrist,
+# stage by stage over lanes (a pose, or a pose's shoulder or arm branch) in loops the compiler
+# vectorises; atan2 and sincos by _atan2_lanes and _sincos_lanes (the same values).
+
+# Rows of the per-pose scratch of _spherical_block
+_P_HEIGHT, _P_FRONT_REACH, _P_BACK_REACH, _P_FRONT_TURN, _P_BACK_TURN, _P_FLAG, \
+    _P_FRONT_VALID, _P_BACK_VALID, _P_ON_AXIS = range(9)
+# Rows of the per-shoulder-branch scratch (lane s * W + k)
+_S_TURN, _S_COLUMNS, _S_DISTANCE, _S_REACHABLE, _S_MERGED, _S_SINE, _S_COSINE, \
+    _S_FLAG = 0, 1, 7, 8, 9, 10, 11, 12
+# Rows of the per-arm-branch scratch (lane (2 s + e) * W + k)
+_L_TURN2, _L_TURN3, _L_H00, _L_H10, _L_H20, _L_FLAG, _L_ALPHA, _L_THETA, \
+    _L_GAMMA = range(9)
+
+
+@_jit
+def _block_target(targets: NDArray[np.float64], k: int) -> tuple[float, float, float, float,
+                                                                  float, float, float, float,
+                                                                  float, float, float, float]:
+    """Entries t_rc of pose k's target from a block's targets (12, W) (rotation column by
+    column, then position): t00, t01, t02, t03, t10, ..., t23 (row by row)."""
+    return (targets[0, k], targets[3, k], targets[6, k], targets[9, k],
+            targets[1, k], targets[4, k], targets[7, k], targets[10, k],
+            targets[2, k], targets[5, k], targets[8, k], targets[11, k])
+
+
+@_jit
+def _spherical_block(g: NDArray[np.float64], targets: NDArray[np.float64],
+                     seeds: NDArray[np.float64], q: NDArray[np.float64],
+                     valid: NDArray[np.bool_], flags: NDArray[np.uint8],
+                     pose: NDArray[np.float64], side: NDArray[np.float64],
+                     arm: NDArray[np.float64], args: NDArray[np.float64]) -> None:
+    """:func:`solve_spherical_wrist` for the ``count`` poses of a block: targets (12, W) (see
+    :func:`_block_target`), seeds (6, W) -> q (count, 8, 6), valid (>= count, 8), flags
+    (count, 8). The same values, computed stage by stage over lanes. Scratch (at least):
+    pose (9, W), side (13, 2 W), arm (9, 4 W), args (3, 8 W)."""
+    count = q.shape[0]
+    W = targets.shape[1]
+    cif = G_CENTRE_IN_FLANGE
+    b_off = g[G_LATERAL_OFFSET]
+    snap = g[G_SNAP] * g[G_SCALE]
+    Y, X, A = args[0], args[1], args[2]
+    for k in range(W):  # _shoulder up to its atan2 calls
+        t00, t01, t02, t03, t10, t11, t12, t13, t20, t21, t22, t23 = _block_target(targets, k)
+        d0 = t03 + t00 * g[cif] + t01 * g[cif + 1] + t02 * g[cif + 2] - g[G_ORIGIN]
+        d1 = (t13 + t10 * g[cif] + t11 * g[cif + 1] + t12 * g[cif + 2]
+              - g[G_ORIGIN + 1])
+        d2 = (t23 + t20 * g[cif] + t21 * g[cif + 1] + t22 * g[cif + 2]
+              - g[G_ORIGIN + 2])
+        x = d0 * g[G_FORWARD] + d1 * g[G_FORWARD + 1] + d2 * g[G_FORWARD + 2]
+        y = d0 * g[G_LATERAL] + d1 * g[G_LATERAL + 1] + d2 * g[G_LATERAL + 2]
+        height = d0 * g[G_UP] + d1 * g[G_UP + 1] + d2 * g[G_UP + 2]
+        radius = math.sqrt(x * x + y * y)
+        gap = radius - abs(b_off)
+        reachable = gap >= -snap
+        merged = abs(gap) <= snap
+        on_axis = radius <= snap
+        forward_reach = 0.0 if merged else math.sqrt(max(gap, 0.0) * (radius + abs(b_off)))
+        near = merged or abs(forward_reach) <= g[G_FLAG] * g[G_SCALE]
+        Y[k], X[k] = y, x
+        Y[W + k], X[W + k] = b_off, forward_reach
+        Y[2 * W + k], X[2 * W + k] = b_off, -forward_reach
+        pose[_P_HEIGHT, k] = height
+        pose[_P_FRONT_REACH, k] = forward_reach - g[G_SHOULDER_OFFSET]
+        pose[_P_BACK_REACH, k] = -forward_reach - g[G_SHOULDER_OFFSET]
+        pose[_P_FLAG, k] = _SHOULDER if near else 0
+        pose[_P_FRONT_VALID, k] = 1.0 if reachable else 0.0
+        pose[_P_BACK_VALID, k] = 1.0 if reachable and (on_axis or not merged) else 0.0
+        pose[_P_ON_AXIS, k] = 1.0 if on_axis else 0.0
+    _atan2_lanes(Y[:3 * W], X[:3 * W], A[:3 * W])
+    for k in range(W):
+        seed_turn = g[G_SIGNS] * seeds[0, k]
+        on_axis = pose[_P_ON_AXIS, k] != 0.0
+        heading = A[k]
+        pose[_P_FRONT_TURN, k] = seed_turn if on_axis else heading - A[W + k]
+        pose[_P_BACK_TURN, k] = seed_turn + math.pi if on_axis else heading - A[2 * W + k]
+    _spherical_sides(g, targets, pose, side, args)
+    _spherical_arms(g, seeds, pose, side, arm, args)
+    _spherical_wrists(g, seeds, side, arm, args)
+    _spherical_store(g, pose, side, arm, count, q, valid, flags)
+
+
+@_jit
+def _spherical_sides(g: NDArray[np.float64], targets: NDArray[np.float64],
+                     pose: NDArray[np.float64], side: NDArray[np.float64],
+                     args: NDArray[np.float64]) -> None:
+    """Per shoulder branch (lane s * W + k): turn1, :func:`_target_columns`, and the elbow's
+    reach of solve_spherical_wrist."""
+    W = pose.shape[1]
+    upper, fore = g[G_ARM + 4], g[G_ARM + 5]
+    snap = g[G_SNAP] * g[G_SCALE]
+    Q = G_TARGET_TO_WRIST
+    theta, sine, cosine = args[0, :2 * W], args[1, :2 * W], args[2, :2 * W]
+    for s in range(2):
+        for k in range(W):
+            turn1 = pose[_P_FRONT_TURN, k] if s == 0 else pose[_P_BACK_TURN, k]
+            side[_S_TURN, s * W + k] = turn1
+            theta[s * W + k] = turn1
+    _sincos_lanes(theta, sine, cosine)
+    for s in range(2):
+        for k in range(W):
+            lane = s * W + k
+            t00, t01, t02, _, t10, t11, t12, _, t20, t21, t22, _ = _block_target(targets, k)
+            s1, c1 = sine[lane], cosine[lane]
+            for column in range(2):
+                c = 2 * column
+                k0 = t00 * g[Q + c] + t01 * g[Q + 3 + c] + t02 * g[Q + 6 + c]
+                k1 = t10 * g[Q + c] + t11 * g[Q + 3 + c] + t12 * g[Q + 6 + c]
+                k2 = t20 * g[Q + c] + t21 * g[Q + 3 + c] + t22 * g[Q + 6 + c]
+                r0, r1, r2 = _rotate(g, G_UP, c1, -s1, k0, k1, k2)
+                side[_S_COLUMNS + 3 * column, lane] = r0
+                side[_S_COLUMNS + 3 * column + 1, lane] = r1
+                side[_S_COLUMNS + 3 * column + 2, lane] = r2
+            t_re = pose[_P_HEIGHT, k]
+            t_im = pose[_P_FRONT_REACH, k] if s == 0 else pose[_P_BACK_REACH, k]
+            distance = math.sqrt(t_re * t_re + t_im * t_im)
+            outer = (upper + fore) - distance
+            inner = distance - abs(upper - fore)
+            reachable = outer >= -snap and inner >= -snap
+            merged = abs(outer) <= snap or abs(inner) <= snap
+            sine_squared = (max(outer, 0.0) * (upper + fore + distance) * max(inner, 0.0)
+                            * (distance + abs(upper - fore)))
+            sine_scaled = 0.0 if merged else math.sqrt(sine_squared)
+            near = merged or sine_scaled <= g[G_FLAG] * 2 * upper * fore
+            side[_S_DISTANCE, lane] = distance
+            side[_S_REACHABLE, lane] = 1.0 if reachable else 0.0
+            side[_S_MERGED, lane] = 1.0 if merged else 0.0
+            side[_S_SINE, lane] = sine_scaled
+            side[_S_COSINE, lane] = distance ** 2 - upper ** 2 - fore ** 2
+            side[_S_FLAG, lane] = _ELBOW if near else 0
+
+
+@_jit
+def _spherical_arms(g: NDArray[np.float64], seeds: NDArray[np.float64],
+                    pose: NDArray[np.float64], side: NDArray[np.float64],
+                    arm: NDArray[np.float64], args: NDArray[np.float64]) -> None:
+    """Per arm branch (lane (2 s + e) * W + k): turn3 and turn2 of solve_spherical_wrist."""
+    W = pose.shape[1]
+    u_re, u_im = g[G_ARM], g[G_ARM + 1]
+    f_re, f_im = g[G_ARM + 2], g[G_ARM + 3]
+    bend_at_zero = g[G_ARM + 6]
+    s2 = g[G_SIGNS + 1]
+    snap = g[G_SNAP] * g[G_SCALE]
+    n = 4 * W
+    Y, X, A = args[0, :n], args[1, :n], args[2, :n]
+    for group in range(4):
+        s, e = group // 2, group % 2
+        for k in range(W):
+            lane = s * W + k
+            sine_scaled = side[_S_SINE, lane]
+            Y[group * W + k] = sine_scaled if e == 0 else -sine_scaled
+            X[group * W + k] = side[_S_COSINE, lane]
+    _atan2_lanes(Y, X, A)
+    for i in range(n):
+        arm[_L_TURN3, i] = A[i] - bend_at_zero
+    theta, sine, cosine = args[0, n:2 * n], args[1, n:2 * n], args[2, n:2 * n]
+    for i in range(n):
+        theta[i] = arm[_L_TURN3, i]
+    _sincos_lanes(theta, sine, cosine)
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            s3t, c3t = sine[i], cosine[i]
+            w_re = u_re + (c3t * f_re - s3t * f_im)
+            w_im = u_im + (c3t * f_im + s3t * f_re)
+            t_re = pose[_P_HEIGHT, k]
+            t_im = pose[_P_FRONT_REACH, k] if s == 0 else pose[_P_BACK_REACH, k]
+            Y[i] = t_re * -w_im + t_im * w_re  # _turn_to
+            X[i] = t_re * w_re - t_im * -w_im
+    _atan2_lanes(Y, X, A)
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            free = side[_S_DISTANCE, s * W + k] <= snap
+            arm[_L_TURN2, i] = s2 * seeds[1, k] if free else A[i]
+
+
+@_jit
+def _spherical_wrists(g: NDArray[np.float64], seeds: NDArray[np.float64],
+                      side: NDArray[np.float64], arm: NDArray[np.float64],
+                      args: NDArray[np.float64]) -> None:
+    """Per arm branch: :func:`_wrist`'s alpha, theta, gamma and WRIST flag (arm rows)."""
+    W = seeds.shape[1]
+    n = 4 * W
+    F = G_WRIST_FRAME
+    d4 = g[G_WRIST_DIRECTIONS]
+    theta, sine, cosine = args[0, :n], args[1, :n], args[2, :n]
+    for i in range(n):
+        theta[i] = arm[_L_TURN2, i] + arm[_L_TURN3, i]
+    _sincos_lanes(theta, sine, cosine)
+    Y, X, A = args[0, :2 * n], args[1, :2 * n], args[2, :2 * n]
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            lane = s * W + k
+            s23, c23 = sine[i], cosine[i]
+            a0, a1, a2 = _rotate(g, G_LATERAL, c23, -s23, side[_S_COLUMNS, lane],
+                                 side[_S_COLUMNS + 1, lane], side[_S_COLUMNS + 2, lane])
+            b0, b1, b2 = _rotate(g, G_LATERAL, c23, -s23, side[_S_COLUMNS + 3, lane],
+                                 side[_S_COLUMNS + 4, lane], side[_S_COLUMNS + 5, lane])
+            h00 = g[F] * a0 + g[F + 3] * a1 + g[F + 6] * a2
+            h10 = g[F + 1] * a0 + g[F + 4] * a1 + g[F + 7] * a2
+            h20 = g[F + 2] * a0 + g[F + 5] * a1 + g[F + 8] * a2
+            h02 = g[F] * b0 + g[F + 3] * b1 + g[F + 6] * b2
+            h12 = g[F + 1] * b0 + g[F + 4] * b1 + g[F + 7] * b2
+            h22 = g[F + 2] * b0 + g[F + 5] * b1 + g[F + 8] * b2
+            wrist_sine = math.sqrt(h02 * h02 + h12 * h12)
+            arm[_L_FLAG, i] = _WRIST if wrist_sine <= g[G_FLAG] else 0
+            singular = wrist_sine <= g[G_WRIST_SNAP]
+            arm[_L_ALPHA, i] = 1.0 if singular else 0.0  # the alpha of a singular wrist: below
+            Y[i], X[i] = 0.0 if singular else wrist_sine, h22
+            Y[n + i], X[n + i] = h12, h02
+            arm[_L_H00, i], arm[_L_H10, i], arm[_L_H20, i] = h00, h10, h20
+    _atan2_lanes(Y, X, A)
+    for group in range(4):
+        for k in range(W):
+            i = group * W + k
+            singular = arm[_L_ALPHA, i] != 0.0
+            arm[_L_ALPHA, i] = d4 * seeds[3, k] if singular else A[n + i]
+            arm[_L_THETA, i] = A[i]
+    theta, sine, cosine = args[0, :2 * n], args[1, :2 * n], args[2, :2 * n]
+    for i in range(n):
+        theta[i] = arm[_L_ALPHA, i]
+        theta[n + i] = arm[_L_THETA, i]
+    _sincos_lanes(theta, sine, cosine)
+    Y, X, A = args[0, :n], args[1, :n], args[2, :n]
+    for i in range(n):
+        sa, ca = sine[i], cosine[i]
+        st, ct = sine[n + i], cosine[n + i]
+        h00, h10, h20 = arm[_L_H00, i], arm[_L_H10, i], arm[_L_H20, i]
+        Y[i] = -sa * h00 + ca * h10
+        X[i] = ct * (ca * h00 + sa * h10) - st * h20
+    _atan2_lanes(Y, X, A)
+    for i in range(n):
+        arm[_L_GAMMA, i] = A[i]
+
+
+@_jit
+def _spherical_store(g: NDArray[np.float64], pose: NDArray[np.float64],
+                     side: NDArray[np.float64], arm: NDArray[np.float64], count: int,
+                     q: NDArray[np.float64], valid: NDArray[np.bool_],
+                     flags: NDArray[np.uint8]) -> None:
+    """The branches 4 s + 2 e + w of solve_spherical_wrist from the lanes, for poses < count."""
+    W = pose.shape[1]
+    s1, s2, s3 = g[G_SIGNS], g[G_SIGNS + 1], g[G_SIGNS + 2]
+    d4 = g[G_WRIST_DIRECTIONS]
+    d5 = g[G_WRIST_DIRECTIONS + 1]
+    d6 = g[G_WRIST_DIRECTIONS + 2]
+    tilt = g[G_TILT]
+    for k in range(count):
+        for group in range(4):
+            s, e = group // 2, group % 2
+            i = group * W + k
+            lane = s * W + k
+            shoulder_valid = pose[_P_FRONT_VALID if s == 0 else _P_BACK_VALID, k] != 0.0
+            arm_valid = (shoulder_valid and side[_S_REACHABLE, lane] != 0.0
+                         and (e == 0 or side[_S_MERGED, lane] == 0.0))
+            flag = int(pose[_P_FLAG, k]) | int(side[_S_FLAG, lane]) | int(arm[_L_FLAG, i])
+            alpha, theta, gamma = arm[_L_ALPHA, i], arm[_L_THETA, i], arm[_L_GAMMA, i]
+            for w in range(2):
+                b = 4 * s + 2 * e + w
+                q[k, b, 0] = s1 * side[_S_TURN, lane]
+                q[k, b, 1] = s2 * arm[_L_TURN2, i]
+                q[k, b, 2] = s3 * arm[_L_TURN3, i]
+                if w == 0:
+                    q[k, b, 3] = d4 * alpha
+                    q[k, b, 4] = d5 * (theta - tilt)
+                    q[k, b, 5] = d6 * gamma
+                else:
+                    q[k, b, 3] = d4 * (alpha + math.pi)
+                    q[k, b, 4] = d5 * (-theta - tilt)
+                    q[k, b, 5] = d6 * (gamma + math.pi)
+                valid[k, b] = arm_valid
+                flags[k, b] = flag
+
+
+# --------------------------------------------------------------------------------------------
 # The offset-wrist family (UR, AUBO): scalar port of offset_wrist.Solver
 
 
@@ -733,24 +1174,58 @@ def _motion_apply(g: NDArray[np.float64], T_home: NDArray[np.float64],
                   v2: float, point: bool) -> tuple[float, float, float]:
     """G v for the motion G = E1(-q1) T M^-1 E6(-q6) E5(-q5) of joints 2-4
     (offset_wrist.Solver._motions_2_to_4), with turns = cos, sin of -q5, -q6, -q1."""
+    return _motion_apply_home(g, _home_entries(T_home), turns, v0, v1, v2, point)
+
+
+@_jit
+def _home_entries(T_home: NDArray[np.float64]) -> tuple[float, float, float, float, float, float,
+                                                        float, float, float, float, float,
+                                                        float]:
+    """The entries of T_home (3, 4), row by row."""
+    return (T_home[0, 0], T_home[0, 1], T_home[0, 2], T_home[0, 3],
+            T_home[1, 0], T_home[1, 1], T_home[1, 2], T_home[1, 3],
+            T_home[2, 0], T_home[2, 1], T_home[2, 2], T_home[2, 3])
+
+
+@_jit
+def _motion_apply_home(g: NDArray[np.float64],
+                       home: tuple[float, float, float, float, float, float, float, float,
+                                   float, float, float, float],
+                       turns: tuple[float, float, float, float, float, float], v0: float,
+                       v1: float, v2: float, point: bool) -> tuple[float, float, float]:
+    """:func:`_motion_apply` with T_home given by its entries, row by row."""
+    h00, h01, h02, h03, h10, h11, h12, h13, h20, h21, h22, h23 = home
     c5, s5, c6, s6, c1, s1 = turns
     x0, x1, x2 = _screw_apply(g, 4, c5, s5, v0, v1, v2, point)
     x0, x1, x2 = _screw_apply(g, 5, c6, s6, x0, x1, x2, point)
-    y0 = T_home[0, 0] * x0 + T_home[0, 1] * x1 + T_home[0, 2] * x2
-    y1 = T_home[1, 0] * x0 + T_home[1, 1] * x1 + T_home[1, 2] * x2
-    y2 = T_home[2, 0] * x0 + T_home[2, 1] * x1 + T_home[2, 2] * x2
+    y0 = h00 * x0 + h01 * x1 + h02 * x2
+    y1 = h10 * x0 + h11 * x1 + h12 * x2
+    y2 = h20 * x0 + h21 * x1 + h22 * x2
     if point:
-        y0, y1, y2 = y0 + T_home[0, 3], y1 + T_home[1, 3], y2 + T_home[2, 3]
+        y0, y1, y2 = y0 + h03, y1 + h13, y2 + h23
     return _screw_apply(g, 0, c1, s1, y0, y1, y2, point)
 
 
 @_jit
-def _motion_turns(q1: float, q5: float, q6: float) -> tuple[float, float, float, float, float,
-                                                             float]:
-    s5, c5 = sincos(-q5)
-    s6, c6 = sincos(-q6)
-    s1, c1 = sincos(-q1)
-    return c5, s5, c6, s6, c1, s1
+def _arm_point(g: NDArray[np.float64], T_home: NDArray[np.float64],
+               turns: tuple[float, float, float, float, float, float]
+               ) -> tuple[float, float, float]:
+    """The arm's target: point 3 under the motion G of joints 2-4 (turns: cos, sin of -q5,
+    -q6, -q1), from point 1, normal to n."""
+    return _arm_point_home(g, _home_entries(T_home), turns)
+
+
+@_jit
+def _arm_point_home(g: NDArray[np.float64],
+                    home: tuple[float, float, float, float, float, float, float, float, float,
+                                float, float, float],
+                    turns: tuple[float, float, float, float, float, float]
+                    ) -> tuple[float, float, float]:
+    """:func:`_arm_point` with T_home given by its entries, row by row."""
+    p1 = _vec(g, O_POINTS + 3)
+    p3 = _vec(g, O_POINTS + 9)
+    a0, a1, a2 = _motion_apply_home(g, home, turns, p3[0], p3[1], p3[2], True)
+    return _in_plane(g, a0 - p1[0], a1 - p1[1], a2 - p1[2])
 
 
 @_jit
@@ -771,7 +1246,8 @@ def _plane_angle(g: NDArray[np.float64], v0: float, v1: float, v2: float) -> flo
 
 @_jit
 def _wrap_angle(angle: float) -> float:
-    r = np.fmod(math.pi - angle, TWO_PI)
+    """angle wrapped to (-pi, pi] as ``pi - np.mod(pi - angle, 2 pi)``."""
+    r = _fmod_two_pi(math.pi - angle)
     if r != 0.0:
         if r < 0.0:
             r += TWO_PI
@@ -788,14 +1264,13 @@ _REACH_COSINE_SLACK = 1e-12
 
 @_jit
 def _kept_in_reach(g: NDArray[np.float64], T_home: NDArray[np.float64],
-                   turns: tuple[float, float, float, float, float, float], q5: float, q6: float,
-                   sine: float) -> float:
+                   turns: tuple[float, float, float, float, float, float],
+                   arm: tuple[float, float, float], q5: float, q6: float, sine: float) -> float:
     """q6, turned onto the arm's reach where the arm point is out of it and the orientation
-    allows (offset_wrist.Solver._keep_in_reach); q6 itself otherwise. turns: _motion_turns."""
+    allows (offset_wrist.Solver._keep_in_reach); q6 itself otherwise. turns: cos, sin of -q5,
+    -q6, -q1; arm: :func:`_arm_point` of them."""
     p1 = _vec(g, O_POINTS + 3)
-    p3 = _vec(g, O_POINTS + 9)
-    a0, a1, a2 = _motion_apply(g, T_home, turns, p3[0], p3[1], p3[2], True)
-    arm0, arm1, arm2 = _in_plane(g, a0 - p1[0], a1 - p1[1], a2 - p1[2])
+    arm0, arm1, arm2 = arm
     low = abs(g[O_UPPER_LENGTH] - g[O_FOREARM_LENGTH])
     high = g[O_UPPER_LENGTH] + g[O_FOREARM_LENGTH]
     span = math.sqrt(arm0 * arm0 + arm1 * arm1 + arm2 * arm2)
@@ -892,22 +1367,28 @@ def solve_offset_wrist(g: NDArray[np.float64], T: NDArray[np.float64],
         q5_half = atan2(sine, cosine)
         along_a = _dot3(u0, u1, u2, w6[0], w6[1], w6[2])
         a0, a1, a2 = u0 - along_a * w6[0], u1 - along_a * w6[1], u2 - along_a * w6[2]
+        s1, c1 = sincos(-q1)
         for w in range(2):
             q5 = g[O_PSI] + (g[O_UP_SIGN] * q5_half if w == 0 else -g[O_UP_SIGN] * q5_half)
+            s5, c5 = sincos(-q5)
             if wrist_singular:
                 q6 = seed[5]
             else:
-                t0, t1, t2 = _axis_rotate(g, 4, -q5, n0, n1, n2)  # R5^T n
+                t0, t1, t2 = _rotate(g, O_DIRECTIONS + 12, c5, s5, n0, n1, n2)  # R5^T n
                 along_b = _dot3(t0, t1, t2, w6[0], w6[1], w6[2])
                 b0, b1, b2 = t0 - along_b * w6[0], t1 - along_b * w6[1], t2 - along_b * w6[2]
                 q6 = atan2(_dot3(w6[0], w6[1], w6[2], a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
                                  a0 * b1 - a1 * b0), _dot3(a0, a1, a2, b0, b1, b2))
-            turns = _motion_turns(q1, q5, q6)
-            kept = _kept_in_reach(g, T_home, turns, q5, q6, sine)
+            s6, c6 = sincos(-q6)
+            turns = (c5, s5, c6, s6, c1, s1)
+            arm = _arm_point(g, T_home, turns)
+            kept = _kept_in_reach(g, T_home, turns, arm, q5, q6, sine)
             if kept != q6:
                 q6 = kept
-                turns = _motion_turns(q1, q5, q6)
-            _elbow_branches(g, T_home, turns, reach_side, seed[1], q1, q5, q6,
+                s6, c6 = sincos(-q6)
+                turns = (c5, s5, c6, s6, c1, s1)
+                arm = _arm_point(g, T_home, turns)
+            _elbow_branches(g, T_home, turns, arm, reach_side, seed[1], q1, q5, q6,
                             _SHOULDER * shoulder_singular | _WRIST * wrist_singular,
                             q1_valid and (w == 0 or not wrist_singular), s, w, q, valid, flags)
     for b in range(q.shape[0]):
@@ -922,17 +1403,15 @@ def solve_offset_wrist(g: NDArray[np.float64], T: NDArray[np.float64],
 
 @_jit
 def _elbow_branches(g: NDArray[np.float64], T_home: NDArray[np.float64],
-                    turns: tuple[float, float, float, float, float, float], reach_side: float,
+                    turns: tuple[float, float, float, float, float, float],
+                    arm: tuple[float, float, float], reach_side: float,
                     seed_q2: float, q1: float, q5: float, q6: float, flag: int,
                     arm_valid: bool, s: int, w: int, q: NDArray[np.float64],
                     valid: NDArray[np.bool_], flags: NDArray[np.uint8]) -> None:
     """Step 4 (offset_wrist.Solver._elbow): q2, q3, q4 of both elbow branches for the motion
-    G of joints 2-4 (turns: _motion_turns), written with q1, q5, q6 into branches
-    4 s + 2 e + w."""
-    p1 = _vec(g, O_POINTS + 3)
-    p3 = _vec(g, O_POINTS + 9)
-    a0, a1, a2 = _motion_apply(g, T_home, turns, p3[0], p3[1], p3[2], True)
-    t0, t1, t2 = _in_plane(g, a0 - p1[0], a1 - p1[1], a2 - p1[2])
+    G of joints 2-4 (turns: cos, sin of -q5, -q6, -q1; arm: :func:`_arm_point`), written with
+    q1, q5, q6 into branches 4 s + 2 e + w."""
+    t0, t1, t2 = arm
     span = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
     L2, L3 = g[O_UPPER_LENGTH], g[O_FOREARM_LENGTH]
     low, high = abs(L2 - L3), L2 + L3
@@ -974,6 +1453,357 @@ def _elbow_branches(g: NDArray[np.float64], T_home: NDArray[np.float64],
         q[b, 0], q[b, 1], q[b, 2], q[b, 3], q[b, 4], q[b, 5] = q1, q2, q3, q4, q5, q6
         valid[b] = arm_valid and reach_ok and (e == 0 or not singular)
         flags[b] = flag | (_ELBOW if singular else 0)
+
+
+# --------------------------------------------------------------------------------------------
+# The offset-wrist family by blocks of poses: solve_offset_wrist stage by stage over lanes (a
+# pose, a pose's shoulder branch, or its shoulder and wrist branch), as _spherical_block; the
+# rare arm point out of reach (_kept_in_reach) is handled lane by lane.
+
+# Rows of the per-pose scratch of _offset_block (T_home: rows 0-11, row by row)
+_OP_PHASE, _OP_HALF, _OP_SHOULDER_OK, _OP_SHOULDER_SINGULAR, _OP_ON_AXIS = range(12, 17)
+# Rows of the per-shoulder-branch scratch (lane s * W + k)
+_OS_Q1, _OS_SINE, _OS_SINGULAR, _OS_A, _OS_Q5_HALF, _OS_S1, _OS_C1 = 0, 1, 2, 3, 6, 7, 8
+# Rows of the per-arm scratch (lane (2 s + w) * W + k)
+_OA_Q5, _OA_Q6, _OA_S5, _OA_C5, _OA_S6, _OA_C6, _OA_ARM, _OA_OUTSIDE, _OA_TOTAL, _OA_REACH_OK, \
+    _OA_SINGULAR, _OA_Q3, _OA_S3, _OA_C3 = 0, 1, 2, 3, 4, 5, 6, 9, 10, 11, 12, 13, 15, 17
+
+
+@_jit
+def _block_home(pose: NDArray[np.float64], k: int) -> tuple[float, float, float, float, float,
+                                                             float, float, float, float, float,
+                                                             float, float]:
+    """Pose k's T_home entries, row by row, from the per-pose scratch."""
+    return (pose[0, k], pose[1, k], pose[2, k], pose[3, k], pose[4, k], pose[5, k],
+            pose[6, k], pose[7, k], pose[8, k], pose[9, k], pose[10, k], pose[11, k])
+
+
+@_jit
+def _offset_block(g: NDArray[np.float64], targets: NDArray[np.float64],
+                  seeds: NDArray[np.float64], q: NDArray[np.float64], valid: NDArray[np.bool_],
+                  flags: NDArray[np.uint8], pose: NDArray[np.float64],
+                  side: NDArray[np.float64], arm: NDArray[np.float64],
+                  args: NDArray[np.float64], work: NDArray[np.float64]) -> None:
+    """:func:`solve_offset_wrist` for the ``count`` poses of a block: targets (12, W) (see
+    :func:`_block_target`), seeds (6, W) -> q (count, 8, 6), valid (>= count, 8), flags
+    (count, 8). The same values, computed stage by stage over lanes. Scratch: pose (17, W),
+    side (9, 2 W), arm (19, 4 W), args (3, 8 W), work (3, 4)."""
+    W = targets.shape[1]
+    H = O_HOME_INVERSE
+    wf = _vec(g, O_WRIST_IN_FLANGE)
+    r1 = _vec(g, O_POINTS)
+    c = g[O_LATERAL]
+    Y, X, A = args[0, :2 * W], args[1, :2 * W], args[2, :2 * W]
+    for k in range(W):  # step 1 up to its atan2 calls
+        T = _block_target(targets, k)
+        for r in range(3):
+            t0, t1, t2, t3 = T[4 * r], T[4 * r + 1], T[4 * r + 2], T[4 * r + 3]
+            for col in range(4):
+                pose[4 * r + col, k] = t0 * g[H + col] + t1 * g[H + 4 + col] + t2 * g[H + 8 + col]
+            pose[4 * r + 3, k] += t3
+        t00, t01, t02, t03, t10, t11, t12, t13, t20, t21, t22, t23 = T
+        w0 = t00 * wf[0] + t01 * wf[1] + t02 * wf[2] + t03
+        w1 = t10 * wf[0] + t11 * wf[1] + t12 * wf[2] + t13
+        w2 = t20 * wf[0] + t21 * wf[1] + t22 * wf[2] + t23
+        h0, h1, h2 = w0 - r1[0], w1 - r1[1], w2 - r1[2]
+        along_n = _dot3(h0, h1, h2, g[O_N], g[O_N + 1], g[O_N + 2])
+        along_side = _dot3(h0, h1, h2, g[O_SIDE], g[O_SIDE + 1], g[O_SIDE + 2])
+        distance = math.sqrt(along_n * along_n + along_side * along_side)
+        on_axis = distance <= g[O_AXIS_TOLERANCE]
+        gap = distance - abs(c)
+        shoulder_ok = gap >= -g[O_REACH_TOLERANCE]
+        root = math.sqrt(max(gap, 0.0) * (distance + abs(c)))
+        shoulder_singular = shoulder_ok and (root <= g[O_TAN_MERGE] * abs(c) or on_axis)
+        Y[k], X[k] = along_side, along_n
+        Y[W + k], X[W + k] = 0.0 if shoulder_singular else root, c
+        pose[_OP_SHOULDER_OK, k] = 1.0 if shoulder_ok else 0.0
+        pose[_OP_SHOULDER_SINGULAR, k] = 1.0 if shoulder_singular else 0.0
+        pose[_OP_ON_AXIS, k] = 1.0 if on_axis else 0.0
+    _atan2_lanes(Y, X, A)
+    for k in range(W):
+        on_axis = pose[_OP_ON_AXIS, k] != 0.0
+        pose[_OP_PHASE, k] = seeds[0, k] if on_axis else A[k]
+        pose[_OP_HALF, k] = 0.0 if on_axis else A[W + k]
+    _offset_sides(g, targets, pose, side, args)
+    _offset_wrists(g, seeds, pose, side, arm, args, work)
+    _offset_elbows(g, pose, side, arm, args)
+    _offset_store(g, seeds, pose, side, arm, args, q, valid, flags)
+
+
+@_jit
+def _offset_sides(g: NDArray[np.float64], targets: NDArray[np.float64],
+                  pose: NDArray[np.float64], side: NDArray[np.float64],
+                  args: NDArray[np.float64]) -> None:
+    """Per shoulder branch (lane s * W + k): q1, and steps 2 and 3 of solve_offset_wrist up to
+    q5_half."""
+    W = pose.shape[1]
+    left_sign = g[O_LEFT_SIGN]
+    n0, n1, n2 = _vec(g, O_N)
+    w6 = _vec(g, O_DIRECTIONS + 15)
+    R = O_HOME_R
+    theta, sine, cosine = args[0, :4 * W], args[1, :4 * W], args[2, :4 * W]
+    for s in range(2):
+        for k in range(W):
+            phase, half = pose[_OP_PHASE, k], pose[_OP_HALF, k]
+            q1 = phase + left_sign * half if s == 0 else phase - left_sign * half
+            side[_OS_Q1, s * W + k] = q1
+            theta[s * W + k] = q1
+            theta[2 * W + s * W + k] = -q1
+    _sincos_lanes(theta, sine, cosine)
+    Y, X = args[0, :2 * W], args[0, 2 * W:4 * W]  # theta's row: read already
+    for s in range(2):
+        for k in range(W):
+            lane = s * W + k
+            t00, t01, t02, _, t10, t11, t12, _, t20, t21, t22, _ = _block_target(targets, k)
+            m0, m1, m2 = _rotate(g, O_DIRECTIONS, cosine[lane], sine[lane], n0, n1, n2)
+            side[_OS_S1, lane], side[_OS_C1, lane] = sine[2 * W + lane], cosine[2 * W + lane]
+            f0 = t00 * m0 + t10 * m1 + t20 * m2  # R_T^T n(q1)
+            f1 = t01 * m0 + t11 * m1 + t21 * m2
+            f2 = t02 * m0 + t12 * m1 + t22 * m2
+            u0 = g[R] * f0 + g[R + 1] * f1 + g[R + 2] * f2  # u = M_R R_T^T n(q1)
+            u1 = g[R + 3] * f0 + g[R + 4] * f1 + g[R + 5] * f2
+            u2 = g[R + 6] * f0 + g[R + 7] * f1 + g[R + 8] * f2
+            cos5 = _dot3(u0, u1, u2, w6[0], w6[1], w6[2])
+            x0 = w6[1] * u2 - w6[2] * u1
+            x1 = w6[2] * u0 - w6[0] * u2
+            x2 = w6[0] * u1 - w6[1] * u0
+            sin5 = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+            wrist_singular = sin5 <= g[O_WRIST_SINGULAR_SIN]
+            sin5 = 0.0 if wrist_singular else sin5
+            side[_OS_SINE, lane] = sin5
+            side[_OS_SINGULAR, lane] = 1.0 if wrist_singular else 0.0
+            Y[lane], X[lane] = sin5, cos5
+            along_a = _dot3(u0, u1, u2, w6[0], w6[1], w6[2])
+            side[_OS_A, lane] = u0 - along_a * w6[0]
+            side[_OS_A + 1, lane] = u1 - along_a * w6[1]
+            side[_OS_A + 2, lane] = u2 - along_a * w6[2]
+    A = args[1, :2 * W]
+    _atan2_lanes(Y, X, A)
+    for lane in range(2 * W):
+        side[_OS_Q5_HALF, lane] = A[lane]
+
+
+@_jit
+def _arm_turns(arm: NDArray[np.float64], side: NDArray[np.float64], i: int,
+               lane: int) -> tuple[float, float, float, float, float, float]:
+    """The turns (cos, sin of -q5, -q6, -q1) of arm lane i on shoulder lane ``lane``."""
+    return (arm[_OA_C5, i], arm[_OA_S5, i], arm[_OA_C6, i], arm[_OA_S6, i], side[_OS_C1, lane],
+            side[_OS_S1, lane])
+
+
+@_jit
+def _offset_wrists(g: NDArray[np.float64], seeds: NDArray[np.float64],
+                   pose: NDArray[np.float64], side: NDArray[np.float64],
+                   arm: NDArray[np.float64], args: NDArray[np.float64],
+                   work: NDArray[np.float64]) -> None:
+    """Per arm lane (2 s + w) * W + k: q5, q6 (kept in reach), their turns and the arm
+    point."""
+    W = pose.shape[1]
+    n = 4 * W
+    n0, n1, n2 = _vec(g, O_N)
+    w6 = _vec(g, O_DIRECTIONS + 15)
+    up = g[O_UP_SIGN]
+    theta, sine, cosine = args[0, :n], args[1, :n], args[2, :n]
+    for group in range(4):
+        s, w = group // 2, group % 2
+        for k in range(W):
+            i = group * W + k
+            q5_half = side[_OS_Q5_HALF, s * W + k]
+            q5 = g[O_PSI] + (up * q5_half if w == 0 else -up * q5_half)
+            arm[_OA_Q5, i] = q5
+            theta[i] = -q5
+    _sincos_lanes(theta, sine, cosine)
+    for i in range(n):
+        arm[_OA_S5, i], arm[_OA_C5, i] = sine[i], cosine[i]
+    Y, X, A = args[0, :n], args[1, :n], args[2, :n]
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            lane = s * W + k
+            t0, t1, t2 = _rotate(g, O_DIRECTIONS + 12, arm[_OA_C5, i], arm[_OA_S5, i], n0, n1,
+                                 n2)  # R5^T n
+            along_b = _dot3(t0, t1, t2, w6[0], w6[1], w6[2])
+            b0, b1, b2 = t0 - along_b * w6[0], t1 - along_b * w6[1], t2 - along_b * w6[2]
+            a0, a1, a2 = side[_OS_A, lane], side[_OS_A + 1, lane], side[_OS_A + 2, lane]
+            Y[i] = _dot3(w6[0], w6[1], w6[2], a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
+                         a0 * b1 - a1 * b0)
+            X[i] = _dot3(a0, a1, a2, b0, b1, b2)
+    _atan2_lanes(Y, X, A)
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            singular = side[_OS_SINGULAR, s * W + k] != 0.0
+            q6 = seeds[5, k] if singular else A[i]
+            arm[_OA_Q6, i] = q6
+            theta[i] = -q6
+    _sincos_lanes(theta, sine, cosine)
+    low = abs(g[O_UPPER_LENGTH] - g[O_FOREARM_LENGTH])
+    high = g[O_UPPER_LENGTH] + g[O_FOREARM_LENGTH]
+    tolerance = g[O_REACH_TOLERANCE]
+    outside = 0
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            arm[_OA_S6, i], arm[_OA_C6, i] = sine[i], cosine[i]
+            t0, t1, t2 = _arm_point_home(g, _block_home(pose, k),
+                                         _arm_turns(arm, side, i, s * W + k))
+            arm[_OA_ARM, i], arm[_OA_ARM + 1, i], arm[_OA_ARM + 2, i] = t0, t1, t2
+            span = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)  # _kept_in_reach's test
+            out = (span > high + tolerance) | (span < low - tolerance)
+            arm[_OA_OUTSIDE, i] = 1.0 if out else 0.0
+            outside += 1 if out else 0
+    if outside > 0:
+        _keep_lanes_in_reach(g, pose, side, arm, work)
+
+
+@_jit
+def _keep_lanes_in_reach(g: NDArray[np.float64], pose: NDArray[np.float64],
+                         side: NDArray[np.float64], arm: NDArray[np.float64],
+                         work: NDArray[np.float64]) -> None:
+    """:func:`_kept_in_reach` for the lanes whose arm point is out of reach (q6, its turns and
+    the arm point updated where it moves q6). work: (3, 4) for T_home."""
+    W = pose.shape[1]
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            lane = s * W + k
+            if arm[_OA_OUTSIDE, i] == 0.0:
+                continue
+            for r in range(3):
+                for col in range(4):
+                    work[r, col] = pose[4 * r + col, k]
+            turns = _arm_turns(arm, side, i, lane)
+            q6 = arm[_OA_Q6, i]
+            kept = _kept_in_reach(g, work, turns, (arm[_OA_ARM, i], arm[_OA_ARM + 1, i],
+                                                   arm[_OA_ARM + 2, i]), arm[_OA_Q5, i], q6,
+                                  side[_OS_SINE, lane])
+            if kept != q6:
+                arm[_OA_Q6, i] = kept
+                arm[_OA_S6, i], arm[_OA_C6, i] = sincos(-kept)
+                t0, t1, t2 = _arm_point(g, work, _arm_turns(arm, side, i, lane))
+                arm[_OA_ARM, i], arm[_OA_ARM + 1, i], arm[_OA_ARM + 2, i] = t0, t1, t2
+
+
+@_jit
+def _offset_elbows(g: NDArray[np.float64], pose: NDArray[np.float64],
+                   side: NDArray[np.float64], arm: NDArray[np.float64],
+                   args: NDArray[np.float64]) -> None:
+    """Per arm lane: :func:`_elbow_branches` up to both elbows' q3 (ordered by reach side)
+    and the plane angle ``total``."""
+    W = pose.shape[1]
+    n = 4 * W
+    L2, L3 = g[O_UPPER_LENGTH], g[O_FOREARM_LENGTH]
+    low, high = abs(L2 - L3), L2 + L3
+    tolerance = g[O_REACH_TOLERANCE]
+    px = _vec(g, O_PLANE_X)
+    Y, X, A = args[0, :2 * n], args[1, :2 * n], args[2, :2 * n]
+    for group in range(4):
+        s = group // 2
+        for k in range(W):
+            i = group * W + k
+            t0, t1, t2 = arm[_OA_ARM, i], arm[_OA_ARM + 1, i], arm[_OA_ARM + 2, i]
+            span = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+            outer = high - span
+            inner = span - low
+            reach_ok = outer >= -tolerance and inner >= -tolerance
+            disc = (max(outer, 0.0) * (high + span) * max(inner, 0.0) * (span + low)) / 4.0
+            root = math.sqrt(disc)
+            kappa = (span * span - L2 * L2 - L3 * L3) / 2.0
+            singular = reach_ok and root <= g[O_TAN_MERGE] * abs(kappa)
+            arm[_OA_REACH_OK, i] = 1.0 if reach_ok else 0.0
+            arm[_OA_SINGULAR, i] = 1.0 if singular else 0.0
+            Y[i], X[i] = 0.0 if singular else root, kappa
+            r0, r1, r2 = _motion_apply_home(g, _block_home(pose, k),
+                                            _arm_turns(arm, side, i, s * W + k), px[0], px[1],
+                                            px[2], False)
+            Y[n + i] = _dot3(r0, r1, r2, g[O_PLANE_Y], g[O_PLANE_Y + 1], g[O_PLANE_Y + 2])
+            X[n + i] = _dot3(r0, r1, r2, g[O_PLANE_X], g[O_PLANE_X + 1], g[O_PLANE_X + 2])
+    _atan2_lanes(Y, X, A)
+    base = g[O_ELBOW_BASE]
+    theta, sine, cosine = args[0, :2 * n], args[1, :2 * n], args[2, :2 * n]
+    for i in range(n):
+        half = A[i]
+        arm[_OA_TOTAL, i] = A[n + i]
+        theta[i] = base + half
+        theta[n + i] = base - half
+    _sincos_lanes(theta, sine, cosine)
+    lateral_sign = g[O_LATERAL_SIGN]
+    for group in range(4):
+        s = group // 2
+        reach_side = lateral_sign if s == 0 else -lateral_sign
+        for k in range(W):
+            i = group * W + k
+            first, second = theta[i], theta[n + i]
+            sf, cf, ss, cs = sine[i], cosine[i], sine[n + i], cosine[n + i]
+            turn = cf * g[O_ELBOW_TURN] + g[O_SIGN3] * sf * g[O_ELBOW_ALPHA]
+            swap = (1.0 if turn >= 0.0 else -1.0) != reach_side
+            arm[_OA_Q3, i], arm[_OA_Q3 + 1, i] = (second, first) if swap else (first, second)
+            arm[_OA_S3, i], arm[_OA_S3 + 1, i] = (ss, sf) if swap else (sf, ss)
+            arm[_OA_C3, i], arm[_OA_C3 + 1, i] = (cs, cf) if swap else (cf, cs)
+
+
+@_jit
+def _offset_store(g: NDArray[np.float64], seeds: NDArray[np.float64],
+                  pose: NDArray[np.float64], side: NDArray[np.float64],
+                  arm: NDArray[np.float64], args: NDArray[np.float64],
+                  q: NDArray[np.float64], valid: NDArray[np.bool_],
+                  flags: NDArray[np.uint8]) -> None:
+    """q2 and q4 of both elbows of every arm lane (:func:`_elbow_branches`), and the branches
+    4 s + 2 e + w of solve_offset_wrist for the poses < count."""
+    W = pose.shape[1]
+    n = 4 * W
+    n0, n1, n2 = _vec(g, O_N)
+    v0, v1, v2 = _vec(g, O_UPPER_ARM)
+    u0, u1, u2 = _vec(g, O_FOREARM)
+    k0, k1, k2 = _vec(g, O_W3_X_FOREARM)
+    Y, X, A = args[0, :2 * n], args[1, :2 * n], args[2, :2 * n]
+    for e in range(2):
+        for i in range(n):
+            t0, t1, t2 = arm[_OA_ARM, i], arm[_OA_ARM + 1, i], arm[_OA_ARM + 2, i]
+            s3, c3 = arm[_OA_S3 + e, i], arm[_OA_C3 + e, i]
+            bent0, bent1, bent2 = (v0 + c3 * u0 + s3 * k0, v1 + c3 * u1 + s3 * k1,
+                                   v2 + c3 * u2 + s3 * k2)
+            free = math.sqrt(bent0 * bent0 + bent1 * bent1 + bent2 * bent2) <= g[
+                O_AXIS_TOLERANCE]
+            Y[e * n + i] = _dot3(n0, n1, n2, bent1 * t2 - bent2 * t1, bent2 * t0 - bent0 * t2,
+                                 bent0 * t1 - bent1 * t0)
+            X[e * n + i] = _dot3(bent0, bent1, bent2, t0, t1, t2)
+            arm[_OA_S3 + e, i] = 1.0 if free else 0.0  # s3 is used: the free flag from here
+    _atan2_lanes(Y, X, A)
+    for k in range(q.shape[0]):
+        shoulder_singular = pose[_OP_SHOULDER_SINGULAR, k] != 0.0
+        shoulder_ok = pose[_OP_SHOULDER_OK, k] != 0.0
+        for group in range(4):
+            s, w = group // 2, group % 2
+            i = group * W + k
+            lane = s * W + k
+            wrist_singular = side[_OS_SINGULAR, lane] != 0.0
+            q1_valid = shoulder_ok and (s == 0 or not shoulder_singular)
+            arm_valid = q1_valid and (w == 0 or not wrist_singular)
+            singular = arm[_OA_SINGULAR, i] != 0.0
+            flag = (_SHOULDER * shoulder_singular | _WRIST * wrist_singular) | (
+                _ELBOW if singular else 0)
+            q1, q5, q6 = side[_OS_Q1, lane], arm[_OA_Q5, i], arm[_OA_Q6, i]
+            for e in range(2):
+                q3 = arm[_OA_Q3 + e, i]
+                q2 = seeds[1, k] if arm[_OA_S3 + e, i] != 0.0 else A[e * n + i]
+                q4 = g[O_SIGN4] * (arm[_OA_TOTAL, i] - q2 - g[O_SIGN3] * q3)
+                b = 4 * s + 2 * e + w
+                q[k, b, 0], q[k, b, 1], q[k, b, 2] = q1, q2, q3
+                q[k, b, 3], q[k, b, 4], q[k, b, 5] = q4, q5, q6
+                ok = (arm_valid and arm[_OA_REACH_OK, i] != 0.0 and (e == 0 or not singular))
+                finite = True
+                for j in range(6):
+                    finite = finite and math.isfinite(q[k, b, j])
+                if not finite:
+                    for j in range(6):
+                        q[k, b, j] = 0.0
+                valid[k, b] = ok and finite
+                flags[k, b] = flag
 
 
 @_jit
@@ -1027,6 +1857,242 @@ def _finish_pose(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.
         totals[b] = total
 
 
+#: Poses per block of :func:`solve_principal` (the block solvers and :func:`_finish_block`; their
+#: lanes' arrays stay in the L1 cache).
+BLOCK_POSES = 32
+#: Joints of the chains the block functions handle (every compiled family); other chains take
+#: the per-pose functions.
+BLOCK_DOF = 6
+
+
+@_jit
+def _joint_constants(chain: NDArray[np.float64], j: int) -> tuple[float, float, float]:
+    """a, cos(alpha), sin(alpha) of joint j."""
+    return chain[j, C_A], chain[j, C_COS_ALPHA], chain[j, C_SIN_ALPHA]
+
+
+@_jit
+def _lane_errors(chain: NDArray[np.float64], modified: bool, sine: NDArray[np.float64],
+                 cosine: NDArray[np.float64], offsets: NDArray[np.float64],
+                 targets: NDArray[np.float64], lanes: NDArray[np.float64]) -> None:
+    """(position, s, c) of :func:`_pose_error` for every lane (b, k) of a block, branch b of
+    its pose k, into lanes[1:4] (7, B, W): FK of a 6-joint chain from sine, cosine and the DH
+    offsets d (6, B, W) of each lane, against the pose's target (targets (12, W): rotation
+    column by column, then position). The loop over poses is branch free and inlines
+    everything: the compiler vectorises it."""
+    n_branches, width = lanes.shape[1], lanes.shape[2]
+    a0, ca0, sa0 = _joint_constants(chain, 0)
+    a1, ca1, sa1 = _joint_constants(chain, 1)
+    a2, ca2, sa2 = _joint_constants(chain, 2)
+    a3, ca3, sa3 = _joint_constants(chain, 3)
+    a4, ca4, sa4 = _joint_constants(chain, 4)
+    a5, ca5, sa5 = _joint_constants(chain, 5)
+    for b in range(n_branches):
+        for k in range(width):
+            state = _dh_step(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0,
+                             sine[0, b, k], cosine[0, b, k], offsets[0, b, k], a0, ca0, sa0,
+                             modified)
+            state = _dh_step(*state, sine[1, b, k], cosine[1, b, k], offsets[1, b, k], a1, ca1,
+                             sa1, modified)
+            state = _dh_step(*state, sine[2, b, k], cosine[2, b, k], offsets[2, b, k], a2, ca2,
+                             sa2, modified)
+            state = _dh_step(*state, sine[3, b, k], cosine[3, b, k], offsets[3, b, k], a3, ca3,
+                             sa3, modified)
+            state = _dh_step(*state, sine[4, b, k], cosine[4, b, k], offsets[4, b, k], a4, ca4,
+                             sa4, modified)
+            state = _dh_step(*state, sine[5, b, k], cosine[5, b, k], offsets[5, b, k], a5, ca5,
+                             sa5, modified)
+            position, s, c = _state_error(
+                *state, targets[0, k], targets[1, k], targets[2, k], targets[3, k],
+                targets[4, k], targets[5, k], targets[6, k], targets[7, k], targets[8, k],
+                targets[9, k], targets[10, k], targets[11, k])
+            lanes[1, b, k] = position
+            lanes[2, b, k] = s
+            lanes[3, b, k] = c
+
+
+@_jit
+def _block_errors(chain: NDArray[np.float64], modified: bool, sine: NDArray[np.float64],
+                  cosine: NDArray[np.float64], offsets: NDArray[np.float64],
+                  targets: NDArray[np.float64], lanes: NDArray[np.float64]) -> None:
+    """:func:`_lane_errors` with the DH convention a constant of each loop."""
+    if modified:
+        _lane_errors(chain, True, sine, cosine, offsets, targets, lanes)
+    else:
+        _lane_errors(chain, False, sine, cosine, offsets, targets, lanes)
+
+
+@_jit
+def _wrap_lane(value: float) -> float:
+    """:func:`wrap` by selects (the compiler vectorises loops calling it): the same value where
+    |pi - value| < 4 pi; ``value`` itself elsewhere (and for NaN), which callers wrap
+    themselves (see :func:`_wrap_lanes`)."""
+    x = math.pi - value
+    size = abs(x)
+    r = x if size < TWO_PI else (x - TWO_PI if x > 0.0 else -(size - TWO_PI))
+    r = r + TWO_PI if r < 0.0 else r
+    r = 0.0 if r == 0.0 else r
+    inside = (-math.pi < value) & (value <= math.pi)
+    reduced = size < 2.0 * TWO_PI
+    return value if inside or not reduced else math.pi - r
+
+
+@_jit
+def _wrap_lanes(chain: NDArray[np.float64], values: NDArray[np.float64],
+                lane: NDArray[np.float64]) -> None:
+    """Revolute joint values (n, B, W) wrapped in place (:func:`wrap`) where ``lane`` (B, W)
+    is 1.0 (the branch is valid); then lane = 0.0 where a value is not finite."""
+    n, n_branches, width = values.shape
+    far = 0  # an integer sum: a float one would not be vectorised (its order is fixed)
+    for j in range(n):
+        if chain[j, C_REVOLUTE] != 0.0:
+            for b in range(n_branches):
+                for k in range(width):
+                    v = values[j, b, k]
+                    w = _wrap_lane(v)
+                    far += 0 if abs(math.pi - v) < 2.0 * TWO_PI else 1
+                    values[j, b, k] = w if lane[b, k] != 0.0 else v
+    if far > 0:  # |value| >= 3 pi, inf or NaN: rare
+        for j in range(n):
+            if chain[j, C_REVOLUTE] != 0.0:
+                for b in range(n_branches):
+                    for k in range(width):
+                        if lane[b, k] != 0.0:
+                            values[j, b, k] = wrap(values[j, b, k])
+    for j in range(n):
+        for b in range(n_branches):
+            for k in range(width):
+                finite = abs(values[j, b, k]) < math.inf
+                lane[b, k] = lane[b, k] if finite else 0.0
+
+
+@_jit
+def _block_thetas(chain: NDArray[np.float64], values: NDArray[np.float64],
+                  lane: NDArray[np.float64], theta: NDArray[np.float64],
+                  offsets: NDArray[np.float64]) -> None:
+    """DH theta (n, B, W) of every joint value (:func:`_theta`; 0 where lane (B, W) is 0.0)
+    and the DH offset d of prismatic joints."""
+    n, n_branches, width = values.shape
+    for j in range(n):
+        direction, offset = chain[j, C_DIRECTION], chain[j, C_OFFSET]
+        if chain[j, C_REVOLUTE] != 0.0:
+            for b in range(n_branches):
+                for k in range(width):
+                    theta[j, b, k] = (direction * values[j, b, k] + offset
+                                      if lane[b, k] != 0.0 else 0.0)
+        else:
+            fixed = chain[j, C_THETA]
+            for b in range(n_branches):
+                for k in range(width):
+                    theta[j, b, k] = fixed
+                    offsets[j, b, k] = direction * (values[j, b, k] if lane[b, k] != 0.0
+                                                    else 0.0) + offset
+
+
+@_jit
+def _block_verdicts(chain: NDArray[np.float64], limits: NDArray[np.float64],
+                    tolerances: NDArray[np.float64], values: NDArray[np.float64],
+                    lanes: NDArray[np.float64]) -> None:
+    """ok, recheck (1.0 / 0.0) and the number of in-limit copies of every lane from its errors
+    and joint values (n, B, W): :func:`_within` and :func:`copy_range` by selects. lanes
+    (7, B, W): usable, position, s, c (inputs), ok, recheck, copies (outputs)."""
+    n, n_branches, width = values.shape
+    usable, position, s, c = lanes[0], lanes[1], lanes[2], lanes[3]
+    ok, close, total = lanes[4], lanes[5], lanes[6]
+    tolerance, tangent = tolerances[0], tolerances[1]
+    inner, inner_tangent = tolerances[2], tolerances[3]
+    if tangent == tangent and inner_tangent == inner_tangent:
+        for b in range(n_branches):
+            for k in range(width):
+                cb = c[b, k]
+                passed = ((usable[b, k] != 0.0) & (position[b, k] <= tolerance) & (cb > 0.0)
+                          & (s[b, k] <= tangent * cb))
+                within = ((position[b, k] <= inner) & (cb > 0.0)
+                          & (s[b, k] <= inner_tangent * cb))
+                ok[b, k] = 1.0 if passed else 0.0
+                close[b, k] = 1.0 if passed and not within else 0.0
+                total[b, k] = 1.0
+    else:  # a tolerance outside [0, pi/2): atan2
+        for b in range(n_branches):
+            for k in range(width):
+                passed = usable[b, k] != 0.0 and _within(position[b, k], s[b, k], c[b, k],
+                                                         tolerance, tangent)
+                ok[b, k] = 1.0 if passed else 0.0
+                close[b, k] = 1.0 if passed and not _within(
+                    position[b, k], s[b, k], c[b, k], inner, inner_tangent) else 0.0
+                total[b, k] = 1.0
+    slack = tolerances[4]
+    for j in range(n):
+        low, high = limits[j, 0] - slack, limits[j, 1] + slack
+        if chain[j, C_REVOLUTE] != 0.0:
+            for b in range(n_branches):
+                for k in range(width):
+                    v = values[j, b, k]
+                    first = np.ceil((low - v) * _INVERSE_TWO_PI)  # floats: no conversions
+                    last = np.floor((high - v) * _INVERSE_TWO_PI)
+                    total[b, k] *= max(last - first + 1.0, 0.0)
+        else:
+            for b in range(n_branches):
+                for k in range(width):
+                    v = values[j, b, k]
+                    total[b, k] *= 1.0 if (low <= v) & (v <= high) else 0.0
+
+
+@_jit
+def _finish_block(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.float64],
+                  targets: NDArray[np.float64], tolerances: NDArray[np.float64],
+                  q: NDArray[np.float64], valid: NDArray[np.bool_], ok: NDArray[np.bool_],
+                  recheck: NDArray[np.bool_], totals: NDArray[np.int64],
+                  trig: NDArray[np.float64], lanes: NDArray[np.float64]) -> None:
+    """:func:`_finish_pose` for a block of ``count`` <= W poses of a 6-joint chain: q
+    (count, B, 6) (wrapped in place) and valid (count, B) -> ok, recheck, totals (count, B);
+    targets (12, W) as in :func:`_lane_errors`. The same values as _finish_pose (the same
+    operations in the same order), computed stage by stage over the block's lanes (branch b of
+    pose k) in loops the compiler vectorises; lanes past ``count`` hold stale values, unused.
+
+    Scratch: trig (5, 6, B, W) (values, theta, sine, cosine, d) whose d rows of revolute joints
+    hold the joint's d; lanes (7, B, W) (see :func:`_block_verdicts`)."""
+    count, n_branches, n = q.shape
+    width = targets.shape[1]
+    values, theta, sine, cosine, offsets = trig[0], trig[1], trig[2], trig[3], trig[4]
+    usable = lanes[0]
+    for k in range(count):
+        for b in range(n_branches):
+            usable[b, k] = 1.0 if valid[k, b] else 0.0
+            for j in range(n):
+                values[j, b, k] = q[k, b, j]
+    for k in range(count, width):
+        for b in range(n_branches):
+            usable[b, k] = 0.0
+    _wrap_lanes(chain, values, usable)
+    _block_thetas(chain, values, usable, theta, offsets)
+    size = theta.size
+    _sincos_map(theta.reshape(size), sine.reshape(size), cosine.reshape(size))
+    _block_errors(chain, modified, sine, cosine, offsets, targets, lanes)
+    _block_verdicts(chain, limits, tolerances, values, lanes)
+    passed, close, total = lanes[4], lanes[5], lanes[6]
+    for k in range(count):
+        for b in range(n_branches):
+            for j in range(n):
+                q[k, b, j] = values[j, b, k]
+            ok[k, b] = passed[b, k] != 0.0
+            recheck[k, b] = close[b, k] != 0.0
+            totals[k, b] = int(total[b, k]) if passed[b, k] != 0.0 else 0
+
+
+@_jit
+def _block_scratch(chain: NDArray[np.float64], n_branches: int,
+                   width: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """trig (5, n, B, W) and lanes (7, B, W) of :func:`_finish_block`, the d rows of revolute
+    joints filled."""
+    n = chain.shape[0]
+    trig = np.zeros((5, n, n_branches, width))
+    for j in range(n):
+        if chain[j, C_REVOLUTE] != 0.0:
+            trig[4, j] = chain[j, C_D]
+    return trig, np.zeros((7, n_branches, width))
+
+
 @_jit
 def solve_principal(family: int, geometry: NDArray[np.float64], chain: NDArray[np.float64],
                     modified: bool, limits: NDArray[np.float64], frames: NDArray[np.float64],
@@ -1037,9 +2103,72 @@ def solve_principal(family: int, geometry: NDArray[np.float64], chain: NDArray[n
                     status: NDArray[np.int8]) -> None:
     """Steps 1-3 of the pipeline for poses targets (N, 4, 4) with a compiled family: input
     check (status), target conversion, the family's principal solutions, wrap and FK check.
+    6-joint chains run by blocks of BLOCK_POSES poses: the spherical-wrist and offset-wrist
+    solvers by :func:`_spherical_block` and :func:`_offset_block` (other families pose by
+    pose), then :func:`_finish_block`; other chains pose by pose.
 
     seeds: (N, n) or (1, n) for all. Outputs q (N, B, n), ok, flags, recheck, totals (N, B).
     """
+    n_poses, n_branches, n = q.shape
+    if n != BLOCK_DOF:
+        _solve_principal_per_pose(family, geometry, chain, modified, limits, frames, targets,
+                                  seeds, tolerances, q, ok, flags, recheck, totals, status)
+        return
+    width = BLOCK_POSES
+    raw = np.zeros((17, width))
+    T_dh = np.empty((3, 4))
+    valid = np.empty((width, n_branches), np.bool_)
+    work = np.zeros((6, 3, 4))
+    block_targets = np.zeros((12, width))
+    block_seeds = np.zeros((n, width))
+    spherical, offset = family == SPHERICAL_WRIST, family == OFFSET_WRIST
+    blocked = (spherical or offset) and n_branches == BRANCHES  # by the block solvers
+    pose, side = np.zeros((17, width)), np.zeros((13, 2 * width))
+    arm, args = np.zeros((19, 4 * width)), np.zeros((3, 8 * width))
+    trig, lanes = _block_scratch(chain, n_branches, width)
+    for start in range(0, n_poses, width):
+        stop = min(start + width, n_poses)
+        _block_poses(frames, targets, start, status[start:stop], raw, block_targets)
+        for i in range(start, stop):
+            k = i - start
+            if status[i] != 0:
+                continue
+            row = i if seeds.shape[0] > 1 else 0
+            if blocked:
+                for j in range(n):
+                    block_seeds[j, k] = seeds[row, j]
+            else:
+                for c in range(3):
+                    for r in range(3):
+                        T_dh[r, c] = block_targets[3 * c + r, k]
+                    T_dh[c, 3] = block_targets[9 + c, k]
+                _solve_family(family, geometry, T_dh, seeds[row], q[i], valid[k], flags[i],
+                              work)
+        if blocked and spherical:
+            _spherical_block(geometry, block_targets, block_seeds, q[start:stop], valid,
+                             flags[start:stop], pose, side, arm, args)
+        elif blocked:
+            _offset_block(geometry, block_targets, block_seeds, q[start:stop], valid,
+                          flags[start:stop], pose, side, arm, args, work[0])
+        for i in range(start, stop):
+            if status[i] != 0:
+                flags[i, :] = 0
+                valid[i - start, :] = False
+        _finish_block(chain, modified, limits, block_targets, tolerances, q[start:stop],
+                      valid, ok[start:stop], recheck[start:stop], totals[start:stop], trig,
+                      lanes)
+
+
+@_jit
+def _solve_principal_per_pose(family: int, geometry: NDArray[np.float64],
+                              chain: NDArray[np.float64], modified: bool,
+                              limits: NDArray[np.float64], frames: NDArray[np.float64],
+                              targets: NDArray[np.float64], seeds: NDArray[np.float64],
+                              tolerances: NDArray[np.float64], q: NDArray[np.float64],
+                              ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+                              recheck: NDArray[np.bool_], totals: NDArray[np.int64],
+                              status: NDArray[np.int8]) -> None:
+    """:func:`solve_principal` pose by pose (chains of other than BLOCK_DOF joints)."""
     n_branches, n = q.shape[1], q.shape[2]
     T_dh = np.empty((3, 4))
     valid = np.empty(n_branches, np.bool_)
@@ -1066,8 +2195,35 @@ def solve_branches(family: int, geometry: NDArray[np.float64], targets_dh: NDArr
                    seeds: NDArray[np.float64], q: NDArray[np.float64], valid: NDArray[np.bool_],
                    flags: NDArray[np.uint8]) -> None:
     """Step 2 alone: the compiled family's principal solutions of DH targets (N, 4, 4) into
-    q (N, B, n), valid, flags (N, B); seeds (N, n) or (1, n) for all."""
+    q (N, B, n), valid, flags (N, B); seeds (N, n) or (1, n) for all. The spherical-wrist and
+    offset-wrist families by blocks (as in :func:`solve_principal`), others pose by pose."""
     work = np.zeros((6, 3, 4))
+    n_poses, n_branches, n = q.shape
+    spherical, offset = family == SPHERICAL_WRIST, family == OFFSET_WRIST
+    if (spherical or offset) and n_branches == BRANCHES and n == BLOCK_DOF:
+        width = BLOCK_POSES
+        block_targets, block_seeds = np.zeros((12, width)), np.zeros((n, width))
+        pose, side = np.zeros((17, width)), np.zeros((13, 2 * width))
+        arm, args = np.zeros((19, 4 * width)), np.zeros((3, 8 * width))
+        for start in range(0, n_poses, width):
+            stop = min(start + width, n_poses)
+            for i in range(start, stop):
+                k = i - start
+                for c in range(3):
+                    for r in range(3):
+                        block_targets[3 * c + r, k] = targets_dh[i, r, c]
+                    block_targets[9 + c, k] = targets_dh[i, c, 3]
+                row = i if seeds.shape[0] > 1 else 0
+                for j in range(n):
+                    block_seeds[j, k] = seeds[row, j]
+            if spherical:
+                _spherical_block(geometry, block_targets, block_seeds, q[start:stop],
+                                 valid[start:stop], flags[start:stop], pose, side, arm, args)
+            else:
+                _offset_block(geometry, block_targets, block_seeds, q[start:stop],
+                              valid[start:stop], flags[start:stop], pose, side, arm, args,
+                              work[0])
+        return
     for i in range(targets_dh.shape[0]):
         seed = seeds[i] if seeds.shape[0] > 1 else seeds[0]
         _solve_family(family, geometry, targets_dh[i], seed, q[i], valid[i], flags[i], work)
@@ -1079,8 +2235,24 @@ def finish_principal(chain: NDArray[np.float64], modified: bool, limits: NDArray
                      q: NDArray[np.float64], valid: NDArray[np.bool_], ok: NDArray[np.bool_],
                      recheck: NDArray[np.bool_], totals: NDArray[np.int64]) -> None:
     """Step 3 for branch solutions of a family without a compiled solver: q (N, B, n) (wrapped
-    in place) and valid (N, B) of DH targets (N, 4, 4) -> ok, recheck, totals (N, B)."""
-    n_branches, n = q.shape[1], q.shape[2]
+    in place) and valid (N, B) of DH targets (N, 4, 4) -> ok, recheck, totals (N, B); by
+    blocks (:func:`_finish_block`) for 6-joint chains."""
+    n_poses, n_branches, n = q.shape
+    if n == BLOCK_DOF:
+        width = BLOCK_POSES
+        block_targets = np.zeros((12, width))
+        trig, lanes = _block_scratch(chain, n_branches, width)
+        for start in range(0, n_poses, width):
+            stop = min(start + width, n_poses)
+            for i in range(start, stop):
+                for c in range(3):
+                    for r in range(3):
+                        block_targets[3 * c + r, i - start] = targets_dh[i, r, c]
+                    block_targets[9 + c, i - start] = targets_dh[i, c, 3]
+            _finish_block(chain, modified, limits, block_targets, tolerances, q[start:stop],
+                          valid[start:stop], ok[start:stop], recheck[start:stop],
+                          totals[start:stop], trig, lanes)
+        return
     errors = np.empty((n_branches, 3))
     trig = np.empty((3, n_branches * n))
     states = np.empty((n + 1, 12))
@@ -1252,8 +2424,9 @@ def expand(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.float6
     """Step 4 for N poses: principal data q (N, B, n), ok, flags, recheck, totals (N, B) ->
     padded outputs out_q (N, m, n), out_valid, out_flags, out_branch (N, m) (padding: q 0,
     valid False, flags 0, branch -1). ``aliased``: the outputs are the principal arrays
-    themselves (copies=False, m = B); each pose is then copied before it is written. Returns
-    the widest row's count, or -1 when m is too small."""
+    themselves (copies=False, m = B); each pose is then copied before it is written, unless
+    its principal values are the answer (:func:`_pack_principal`, in place). Returns the
+    widest row's count, or -1 when m is too small."""
     n_poses, n_branches, n = q.shape
     width = out_q.shape[1]
     pose_q = np.empty((n_branches, n))
@@ -1266,7 +2439,9 @@ def expand(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.float6
     fk_work = np.empty((n + 3, 12))
     widest = 0
     for i in range(n_poses):
-        if aliased:
+        if not copies and _principal_values_suffice(limits, q, ok, recheck, totals, i):
+            count = _pack_principal(q, ok, flags, totals, out_q, out_branch, out_flags, i)
+        elif aliased:
             for b in range(n_branches):
                 for j in range(n):
                     pose_q[b, j] = q[i, b, j]
@@ -1293,6 +2468,45 @@ def expand(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.float6
             out_flags[i, k] = 0
             out_branch[i, k] = -1
     return widest
+
+
+@_jit
+def _principal_values_suffice(limits: NDArray[np.float64], q: NDArray[np.float64],
+                              ok: NDArray[np.bool_], recheck: NDArray[np.bool_],
+                              totals: NDArray[np.int64], i: int) -> bool:
+    """Whether every passing branch of pose i (q (N, B, n), ok, recheck, totals (N, B)) has
+    its principal value inside the limits and needs no recheck: _expand_pose's fast path with
+    copies=False, taken by every branch (see :func:`_pack_principal`). (Whole arrays and an
+    index: a view per pose would cost its reference counting.)"""
+    for b in range(q.shape[1]):
+        if ok[i, b] and totals[i, b] != 0:
+            if recheck[i, b]:
+                return False
+            for j in range(q.shape[2]):
+                if not limits[j, 0] <= q[i, b, j] <= limits[j, 1]:
+                    return False
+    return True
+
+
+@_jit
+def _pack_principal(q: NDArray[np.float64], ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+                    totals: NDArray[np.int64], out_q: NDArray[np.float64],
+                    out_branch: NDArray[np.int16], out_flags: NDArray[np.uint8], i: int) -> int:
+    """_expand_pose with copies=False for pose i of which :func:`_principal_values_suffice`:
+    the passing branches' principal values, in order of branch. The outputs may be the inputs
+    themselves (row ``slot`` <= b is written after row b is read). Returns the count, or -1
+    when out_q has too few rows."""
+    slot = 0
+    for b in range(q.shape[1]):
+        if ok[i, b] and totals[i, b] != 0:
+            if slot >= out_q.shape[1]:
+                return -1
+            for j in range(q.shape[2]):
+                out_q[i, slot, j] = q[i, b, j]
+            out_branch[i, slot] = b
+            out_flags[i, slot] = flags[i, b]
+            slot += 1
+    return slot
 
 
 # Layout of the ``plan`` of :func:`solve_one` (:func:`plan_array`): family id, DH convention

@@ -362,3 +362,24 @@ def test_streaming_a_ur_arm_with_every_copy_stays_small(load_robot):
     print(f"\n10^5 UR5 poses, every copy ({total / len(T):.0f} per pose), streamed: peak "
           f"{peak / 2**20:.0f} MiB")
     assert peak < 128 * 2**20
+
+
+def test_copies_nearest_zero_outside_the_principal_range_match_ik(load_robot):
+    """IRB 1200, joint 3 in [-200, 70] deg: poses with q3 below -180 deg have a wrapped
+    (principal) value above 70 deg, so copies=False keeps a 2pi copy of it (packed by expand
+    without an FK check of its own). ik_batch gives the same rows as ik, each exact."""
+    robot = load_robot("abb_irb1200_7_70")
+    rng = np.random.default_rng(23)
+    q = robot.table.random_q(64, rng)
+    q[:, 2] = rng.uniform(np.radians(-199.0), np.radians(-181.0), len(q))
+    T = robot.fk(q)
+    batch = robot.ik_batch_detailed(T, copies=False)
+    assert (batch.q[..., 2][batch.valid] < -np.pi).any()
+    for i in range(len(T)):
+        solutions = robot.ik(T[i], copies=False)
+        keep = batch.valid[i]
+        np.testing.assert_array_equal(solutions.q, batch.q[i][keep])
+        if len(solutions):
+            position, rotation = pose_error(robot.fk(solutions.q),
+                                            np.broadcast_to(T[i], (len(solutions), 4, 4)))
+            assert position.max() <= 1e-9 and rotation.max() <= 1e-9

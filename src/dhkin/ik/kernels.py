@@ -2425,8 +2425,9 @@ def expand(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.float6
     padded outputs out_q (N, m, n), out_valid, out_flags, out_branch (N, m) (padding: q 0,
     valid False, flags 0, branch -1). ``aliased``: the outputs are the principal arrays
     themselves (copies=False, m = B); each pose is then copied before it is written, unless
-    its principal values are the answer (:func:`_pack_principal`, in place). Returns the
-    widest row's count, or -1 when m is too small."""
+    none of the copies it keeps needs an FK check of its own (:func:`_pack_principal`,
+    :func:`_pack_nearest`, in place). Returns the widest row's count, or -1 when m is too
+    small."""
     n_poses, n_branches, n = q.shape
     width = out_q.shape[1]
     pose_q = np.empty((n_branches, n))
@@ -2441,6 +2442,10 @@ def expand(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.float6
     for i in range(n_poses):
         if not copies and _principal_values_suffice(limits, q, ok, recheck, totals, i):
             count = _pack_principal(q, ok, flags, totals, out_q, out_branch, out_flags, i)
+        elif not copies and _nearest_copies_suffice(chain, limits, tolerances, q, ok, recheck,
+                                                    totals, i):
+            count = _pack_nearest(chain, limits, tolerances, q, ok, flags, totals, out_q,
+                                  out_branch, out_flags, i)
         elif aliased:
             for b in range(n_branches):
                 for j in range(n):
@@ -2468,6 +2473,72 @@ def expand(chain: NDArray[np.float64], modified: bool, limits: NDArray[np.float6
             out_flags[i, k] = 0
             out_branch[i, k] = -1
     return widest
+
+
+@_jit
+def _nearest_copy(chain: NDArray[np.float64], limits: NDArray[np.float64],
+                  tolerances: NDArray[np.float64], j: int, value: float) -> float:
+    """The copy of joint j's value ``value`` that _expand_pose keeps with copies=False before
+    clipping: value + 2pi turn, the turn of :func:`copy_range`'s nearest to 0 (the same
+    operations as :func:`_copy_value`); a prismatic value itself. The value must have a copy
+    (its branch's total is not 0)."""
+    if chain[j, C_REVOLUTE] == 0.0:
+        return value
+    lo = math.ceil((limits[j, 0] - tolerances[4] - value) * _INVERSE_TWO_PI)  # copy_range
+    hi = math.floor((limits[j, 1] + tolerances[4] - value) * _INVERSE_TWO_PI)
+    return value + TWO_PI * min(max(0, lo), hi)
+
+
+@_jit
+def _nearest_copies_suffice(chain: NDArray[np.float64], limits: NDArray[np.float64],
+                            tolerances: NDArray[np.float64], q: NDArray[np.float64],
+                            ok: NDArray[np.bool_], recheck: NDArray[np.bool_],
+                            totals: NDArray[np.int64], i: int) -> bool:
+    """Whether no passing branch of pose i needs an FK check of its own in _expand_pose with
+    copies=False: none needs a recheck, and each copy kept (:func:`_nearest_copy` of each joint
+    of a branch with a value outside the limits) is inside the limits, so not clipped. Then
+    :func:`_pack_nearest` gives _expand_pose's answer."""
+    for b in range(q.shape[1]):
+        if ok[i, b] and totals[i, b] != 0:
+            if recheck[i, b]:
+                return False
+            for j in range(q.shape[2]):
+                value = q[i, b, j]
+                if not limits[j, 0] <= value <= limits[j, 1]:
+                    value = _nearest_copy(chain, limits, tolerances, j, value)
+                    if not limits[j, 0] <= value <= limits[j, 1]:
+                        return False
+    return True
+
+
+@_jit
+def _pack_nearest(chain: NDArray[np.float64], limits: NDArray[np.float64],
+                  tolerances: NDArray[np.float64], q: NDArray[np.float64], ok: NDArray[np.bool_],
+                  flags: NDArray[np.uint8], totals: NDArray[np.int64],
+                  out_q: NDArray[np.float64], out_branch: NDArray[np.int16],
+                  out_flags: NDArray[np.uint8], i: int) -> int:
+    """_expand_pose with copies=False for pose i of which :func:`_nearest_copies_suffice`: per
+    passing branch, in order of branch, its principal values where they are all inside the
+    limits, else the copies nearest 0 of all its joints (:func:`_nearest_copy`). In place as
+    :func:`_pack_principal`. Returns the count, or -1 when out_q has too few rows."""
+    slot = 0
+    n = q.shape[2]
+    for b in range(q.shape[1]):
+        if ok[i, b] and totals[i, b] != 0:
+            if slot >= out_q.shape[1]:
+                return -1
+            inside = True
+            for j in range(n):
+                value = q[i, b, j]
+                inside = inside & (limits[j, 0] <= value) & (value <= limits[j, 1])
+            for j in range(n):
+                value = q[i, b, j]
+                out_q[i, slot, j] = value if inside else _nearest_copy(chain, limits,
+                                                                       tolerances, j, value)
+            out_branch[i, slot] = b
+            out_flags[i, slot] = flags[i, b]
+            slot += 1
+    return slot
 
 
 @_jit

@@ -498,7 +498,8 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
     robot.ik(poses.T[0])  # this thread's buffers
     out_q, out_errors, out_keys, scratch = pipeline._buffers.arrays
     sample = poses.T[:2000]
-    kernel_one = best_single(lambda T: kernels.solve_one(
+    entry_point = pipeline._one_kernel  # what robot.ik calls: no per-call type resolution
+    kernel_one = best_single(lambda T: entry_point(
         pipeline.plan, pipeline.frames, T, pipeline._zero_seed, tolerances, False, out_q,
         out_errors, out_keys, scratch), sample, runs)
     whole_one = best_single(lambda T: robot.ik(T, copies=False), sample, runs)

@@ -51,6 +51,7 @@ from dhkin.singularity import (
     KINDS,
     SingularityError,
     SingularityModel,
+    cli_joint_values,
     singularity_model,
 )
 from dhkin.transforms import xyz_rpy_to_matrix
@@ -776,12 +777,7 @@ def cli_map(args: argparse.Namespace) -> int:
         rpy = np.radians(args.rpy) if args.deg else np.asarray(args.rpy, dtype=float)
     q_fixed = None
     if args.q is not None:
-        values = np.asarray(args.q, dtype=float)
-        if values.shape != (robot.dof,):
-            raise SingularityError(f"--q: {robot.name} has {robot.dof} joints, got "
-                                   f"{values.size} values")
-        revolute = np.array([j.is_revolute for j in robot.table.joints])
-        q_fixed = np.where(revolute & bool(args.deg), np.radians(values), values)
+        q_fixed = cli_joint_values(robot, args.q, bool(args.deg), "--q")
     maps = draw_maps(robot, args.output, plane=args.plane, offset=args.offset, rpy=rpy,
                      resolution=args.resolution, joint_resolution=args.joint_resolution,
                      q_fixed=q_fixed, progress=not args.no_progress and sys.stderr.isatty())

@@ -1032,24 +1032,32 @@ def add_singularity_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
+def cli_joint_values(robot: Robot, values: Sequence[float], degrees: bool,
+                     field: str) -> NDArray[np.float64]:
+    """Joint values given on the command line (option ``field``) -> SI; ``degrees`` converts
+    the revolute joints only. Raises SingularityError unless there is one value per joint."""
+    array = np.asarray(values, dtype=float)
+    if array.shape != (robot.dof,):
+        raise SingularityError(f"{field}: {robot.name} has {robot.dof} joints, got {array.size} "
+                               f"values")
+    revolute = np.array([j.is_revolute for j in robot.table.joints])
+    return np.where(revolute & degrees, np.radians(array), array)
+
+
 def cli_singularity(args: argparse.Namespace) -> int:
     """`dhkin singularity`: print the report of one configuration; exit status 0."""
     from dhkin.robot import load
 
     robot = load(args.robot)
-    values = np.asarray(args.q, dtype=float)
-    if values.shape != (robot.dof,):
-        raise SingularityError(f"q: {robot.name} has {robot.dof} joints, got {values.size} "
-                               f"values")
-    revolute = np.array([j.is_revolute for j in robot.table.joints])
-    q = np.where(revolute & bool(args.deg), np.radians(values), values)
+    q = cli_joint_values(robot, args.q, bool(args.deg), "q")
     thresholds = Thresholds(**{kind: getattr(args, kind) for kind in KINDS})
     report = singularity_report(robot, q, thresholds)
     if args.json:
         print(json.dumps(report_to_json(report), indent=2))
         return 0
     if args.deg:
-        shown = np.where(revolute, values, q)
+        revolute = np.array([j.is_revolute for j in robot.table.joints])
+        shown = np.where(revolute, np.asarray(args.q, dtype=float), q)  # as given
         print(f"q = {np.array2string(shown, precision=4)} (deg for revolute joints)")
     print(report)
     return 0

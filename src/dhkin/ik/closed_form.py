@@ -262,6 +262,23 @@ def solve_compiled(solver: BranchSolver, T_dh: ArrayLike, q_seed: ArrayLike) -> 
     return Branches(q=q, valid=valid, flags=flags)
 
 
+class CompiledSolver:
+    """Base of a family solver with a compiled twin in :mod:`dhkin.ik.kernels`: the subclass
+    sets ``_compiled`` = (family id, geometry vector) and provides ``solve_reference``, the
+    vectorised numpy formulation the kernel ports step by step (tests compare the two)."""
+
+    _compiled: tuple[int, NDArray[np.float64]]
+
+    def compiled(self) -> tuple[int, NDArray[np.float64]]:
+        """Family id and geometry vector of the compiled solver (dhkin.ik.kernels)."""
+        return self._compiled
+
+    def solve(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]) -> Branches:
+        """Principal solutions (N, B, n) of flange targets T_dh (N, 4, 4), DH frame 0 -> n,
+        computed by the compiled twin of ``solve_reference``."""
+        return solve_compiled(self, T_dh, q_seed)
+
+
 class Pipeline:
     """The pipeline of one family solver and table, with the constants of the compiled kernels
     built once (a :class:`~dhkin.robot.Robot` keeps one).

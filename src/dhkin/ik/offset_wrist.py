@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
-from dhkin.ik.closed_form import Branches, solve_compiled
+from dhkin.ik.closed_form import Branches, CompiledSolver
 from dhkin.ik.result import ELBOW, SHOULDER, WRIST
 
 FAMILY = "offset_wrist"
@@ -314,7 +314,7 @@ class _Elbow:
     span: NDArray[np.float64]        # (N, 2, 2): axis 2 -> axis 4 in the arm plane (m)
 
 
-class Solver:
+class Solver(CompiledSolver):
     """Closed-form branch solver of the offset-wrist family (see the module docstring).
 
     ``solve(T_dh, q_seed)`` takes targets DH frame 0 -> DH frame 6, shape (N, 4, 4), and seeds
@@ -355,10 +355,6 @@ class Solver:
             wrist_singular_sin=WRIST_SINGULAR_SIN, exact_band=EXACT_BAND)
 
     # -- step 1: q1 -------------------------------------------------------------------------
-
-    def compiled(self) -> tuple[int, NDArray[np.float64]]:
-        """Family id and geometry vector of the compiled solver (dhkin.ik.kernels)."""
-        return self._compiled
 
     def _shoulder(self, wrist: NDArray[np.float64], seed_q1: NDArray[np.float64]) -> _Shoulder:
         """Both roots of ``n(q1) . (wrist - r1) = c`` for wrist points (N, 3)."""
@@ -516,14 +512,6 @@ class Solver:
             wrist = _Wrist(q5=wrist.q5, q6=q6, sine=wrist.sine, singular=wrist.singular)
             G = self._motions_2_to_4(T, shoulder.q1, wrist.q5, wrist.q6)
         return shoulder, wrist, self._elbow(G, shoulder.reach_side, seed[:, 1])
-
-    def solve(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]) -> Branches:
-        """Principal solutions of N targets (DH frame 0 -> 6), 8 branches each; see the class.
-
-        Computed by the compiled twin (dhkin.ik.kernels.solve_offset_wrist) of
-        :meth:`solve_reference`, the vectorised numpy formulation it ports step by step.
-        """
-        return solve_compiled(self, T_dh, q_seed)
 
     def solve_reference(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]
                         ) -> Branches:

@@ -65,7 +65,7 @@ from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
-from dhkin.ik.closed_form import Branches, solve_compiled
+from dhkin.ik.closed_form import Branches, CompiledSolver
 from dhkin.ik.result import ELBOW, SHOULDER, WRIST
 
 FAMILY = "spherical_wrist"
@@ -565,7 +565,7 @@ def _bend_labels(table: DHTable, geometry: ArmGeometry) -> list[tuple[bool, str]
     return labels
 
 
-class Solver:
+class Solver(CompiledSolver):
     """Closed-form IK of one table of this family (the BranchSolver of ik/closed_form.py).
 
     Eight branches, index ``4 * shoulder + 2 * elbow + wrist``, with shoulder 0 = forward side
@@ -599,18 +599,6 @@ class Solver:
                abs(g.upper_arm), abs(g.forearm), float(np.angle(g.forearm / g.upper_arm)))
         return kernels.SPHERICAL_WRIST, compiled_geometry(g.shoulder, g.wrist, g.flange_zero,
                                                           g.arm_signs, g.scale, arm)
-
-    def compiled(self) -> tuple[int, NDArray[np.float64]]:
-        """Family id and geometry vector of the compiled solver (dhkin.ik.kernels)."""
-        return self._compiled
-
-    def solve(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]) -> Branches:
-        """Principal solutions (N, 8, 6) of flange targets T_dh (N, 4, 4), DH frame 0 -> n.
-
-        Computed by the compiled twin (dhkin.ik.kernels.solve_spherical_wrist) of
-        :meth:`solve_reference`, the vectorised numpy formulation it ports step by step.
-        """
-        return solve_compiled(self, T_dh, q_seed)
 
     def solve_reference(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]
                         ) -> Branches:

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
-from dhkin.ik.closed_form import Branches, solve_compiled
+from dhkin.ik.closed_form import Branches, CompiledSolver
 from dhkin.ik.result import ELBOW
 from dhkin.ik.spherical_wrist import (
     GEOMETRY_TOLERANCE,
@@ -153,7 +153,7 @@ def solve_slide(wrist_at_zero: complex, slide: complex, target: NDArray[np.compl
     return SlideSolution(turn2=turn2, slide=t, valid=valid, flags=flags)
 
 
-class Solver:
+class Solver(CompiledSolver):
     """Closed-form IK of one Stanford-class table (the BranchSolver of ik/closed_form.py).
 
     Eight branches, index ``4 * shoulder + 2 * slide + wrist``: shoulder 0 = forward side,
@@ -189,18 +189,6 @@ class Solver:
                along_and_offset.real, abs(along_and_offset.imag))
         return kernels.STANFORD, compiled_geometry(g.shoulder, g.wrist, g.flange_zero,
                                                    g.arm_signs, g.scale, arm)
-
-    def compiled(self) -> tuple[int, NDArray[np.float64]]:
-        """Family id and geometry vector of the compiled solver (dhkin.ik.kernels)."""
-        return self._compiled
-
-    def solve(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]) -> Branches:
-        """Principal solutions (N, 8, 6) of flange targets T_dh (N, 4, 4), DH frame 0 -> n.
-
-        Computed by the compiled twin (dhkin.ik.kernels.solve_stanford) of
-        :meth:`solve_reference`, the vectorised numpy formulation it ports step by step.
-        """
-        return solve_compiled(self, T_dh, q_seed)
 
     def solve_reference(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64]
                         ) -> Branches:

@@ -23,15 +23,8 @@ from dhkin.errors import DhkinError
 from dhkin.robot import Robot, builtin_dir
 from dhkin.urdf import generate
 from dhkin.validators import load_in_pinocchio, load_in_yourdfpy, run_check_urdf
+from dhkin.vendors import VENDOR_REFERENCES
 
-#: Vendor URDFs of ../shared/reference: robot -> (file, base frame, vendor tip, our tip).
-VENDOR_REFERENCES: dict[str, tuple[str, str, str, str]] = {
-    "abb_irb1200_7_70": ("abb_irb1200_7_70.urdf", "base_link", "tool0", "tool0"),
-    "aubo_i10": ("aubo_i10.urdf", "base_link", "wrist3_Link", "tool0"),
-    "ur3": ("ur3.urdf", "base_link", "tool0", "tool0"),
-    "ur5": ("ur5.urdf", "base_link", "tool0", "tool0"),
-    "ur10": ("ur10.urdf", "base_link", "tool0", "tool0"),
-}
 FK_SAMPLES = 1000
 FK_TOLERANCE = 1e-12
 NUMERICAL_POSES = 1000
@@ -82,11 +75,11 @@ def check_vendor(robot: Robot, reference_dir: Path | None) -> CheckCell | None:
     """Max pose deviation from the vendor URDF, or None when the robot has no reference."""
     if robot.name not in VENDOR_REFERENCES:
         return None
-    file, base, tip, our_tip = VENDOR_REFERENCES[robot.name]
-    if reference_dir is None or not (reference_dir / file).is_file():
-        return CheckCell(False, f"missing {file}")
-    report = compare_with_urdf(robot, reference_dir / file, base_frame=base, tip=tip,
-                               robot_tip=our_tip)
+    vendor = VENDOR_REFERENCES[robot.name]
+    if reference_dir is None or not (reference_dir / vendor.file).is_file():
+        return CheckCell(False, f"missing {vendor.file}")
+    report = compare_with_urdf(robot, reference_dir / vendor.file, base_frame=vendor.base,
+                               tip=vendor.tip, robot_tip=vendor.robot_tip)
     return CheckCell(report.ok, f"{max(report.max_position, report.max_rotation):.1e}")
 
 

@@ -1,0 +1,30 @@
+"""The vendor descriptions each built-in robot is checked against (``../shared/reference``).
+
+:data:`VENDOR_REFERENCES` maps a built-in robot's name to a :class:`VendorReference`: the vendor
+URDF's file name and the frames that correspond to the table's ``base_link`` and ``tool0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class VendorReference:
+    """A vendor URDF and its frames: ``base`` (= the table's base_link), ``tip`` (the vendor's
+    frame that equals the table's ``robot_tip``, normally tool0)."""
+
+    file: str
+    base: str
+    tip: str
+    robot_tip: str = "tool0"
+
+
+#: Built-in robot -> its vendor description in ../shared/reference.
+VENDOR_REFERENCES: dict[str, VendorReference] = {
+    "abb_irb1200_7_70": VendorReference("abb_irb1200_7_70.urdf", "base_link", "tool0"),
+    "aubo_i10": VendorReference("aubo_i10.urdf", "base_link", "wrist3_Link"),
+    "ur3": VendorReference("ur3.urdf", "base_link", "tool0"),
+    "ur5": VendorReference("ur5.urdf", "base_link", "tool0"),
+    "ur10": VendorReference("ur10.urdf", "base_link", "tool0"),
+}

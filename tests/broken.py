@@ -1,20 +1,24 @@
 """Deliberately broken IKs, each wrong in one way a real IK goes wrong, for `dhkin validate`.
 
 Use them as ``dhkin validate ur5 --ik tests.broken:sign_flip`` (from the repository root). Each
-takes the target T (base_link -> tool0) and the robot under test, and returns joint vectors in
-radians, as the validation contract says.
+takes the target T (base_link -> tool0) and the robot under test (and, for the seed-aware ones,
+``q_seed``), and returns joint vectors in radians, as the validation contract says.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from functools import cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 import dhkin
 from dhkin.robot import Robot
+
+if TYPE_CHECKING:
+    from dhkin.ik.result import IKSolutions
 
 #: |sin q5| under which a solution counts as on the wrist singularity here.
 WRIST_SINGULAR = 1e-6
@@ -54,3 +58,36 @@ def wrong_wrist_split(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float6
 def degrees_as_radians(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
     """Correct solutions, returned in degrees where radians are expected."""
     return np.degrees(robot.ik(T).q)
+
+
+def seed_ignored(T: NDArray[np.float64], robot: Robot,
+                 q_seed: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    """Declares q_seed but ignores it: at q5 = 0 the free joint always comes from a seed of
+    zeros, so the answer does not follow the caller's seed (caught as "discontinuous"; exact at
+    q5 = 0, where the pose cannot tell which q4/q6 split was sampled)."""
+    return robot.ik(T, q_seed=np.zeros(robot.dof)).q
+
+
+def _branch_of_seed(robot: Robot, solutions: IKSolutions,
+                    q_seed: NDArray[np.float64]) -> dict[str, str]:
+    """Labels of the solution nearest q_seed (joint differences mod 2pi)."""
+    revolute = np.array([j.is_revolute for j in robot.table.joints])
+    difference = solutions.q - q_seed
+    difference = np.where(revolute, np.pi - np.mod(np.pi - difference, 2 * np.pi), difference)
+    nearest = int(np.argmin(np.abs(difference).max(axis=1)))
+    return dict(solutions.configurations[nearest].labels)
+
+
+def branch_dropped_off_seed(T: NDArray[np.float64], robot: Robot,
+                            q_seed: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    """Exact solutions, and the seed's own branch always among them, but the solver's first
+    branch is dropped whenever the seed is not on it: the sampled q is never missing, the
+    branch is (caught as "missing_branch" only)."""
+    solutions = robot.ik(T, q_seed=q_seed)
+    if not solutions:
+        return solutions.q
+    first = dict(robot.ik_solver.branch_labels[0])
+    if q_seed is not None and _branch_of_seed(robot, solutions, np.asarray(q_seed)) == first:
+        return solutions.q
+    keep = [k for k, c in enumerate(solutions.configurations) if dict(c.labels) != first]
+    return solutions.q[keep]

@@ -14,7 +14,7 @@ import dhkin
 from dhkin.cli import main
 from dhkin.validators import run_check_urdf
 
-from .conftest import REFERENCE_URDFS
+from .conftest import REFERENCE_URDFS, REPO
 
 
 def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
@@ -167,3 +167,128 @@ def test_map_writes_a_png(capsys, tmp_path) -> None:
     code, _, _ = run(capsys, "map", "abb_irb1200_7_70", "-o", str(path), "--resolution", "12")
     assert code == 0
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# --------------------------------------------------------------------------------------------
+# validate and check
+
+
+def test_cli_validate_catches_sign_flip_and_replays(capsys, tmp_path, monkeypatch) -> None:
+    """Acceptance: `dhkin validate ur5 --ik tests.broken:sign_flip` exits non-zero with a
+    non-zero wrong rate; the failure file reruns with --replay on the reference it records."""
+    monkeypatch.chdir(REPO)
+    failures = tmp_path / "f.json"
+    code, out, _ = run(capsys, "validate", "ur5", "--ik", "tests.broken:sign_flip", "-n", "30",
+                       "--reference", "exact", "--failures", str(failures),
+                       "--json", str(tmp_path / "r.json"), "--report", str(tmp_path / "r.md"))
+    assert code == 1
+    assert "wrong 100.000%" in out or "wrong 9" in out
+    assert "reference: exact (generated URDF)" in out
+    assert json.loads((tmp_path / "r.json").read_text())["rates"]["wrong"] > 0.5
+    assert (tmp_path / "r.md").read_text().startswith("# IK validation")
+    code, out, _ = run(capsys, "validate", "ur5", "--ik", "tests.broken:sign_flip",
+                       "--replay", str(failures), "--failures", str(tmp_path / "g.json"))
+    assert code == 1 and "reference: exact" in out
+    code, out, _ = run(capsys, "validate", "ur5", "--replay", str(failures))
+    assert code == 0, out
+    assert "reference: exact" in out
+
+
+def test_cli_validate_own_ik_passes(capsys) -> None:
+    code, out, _ = run(capsys, "validate", "abb_irb1200_7_70", "-n", "50", "--reference", "exact")
+    assert code == 0, out
+    assert "PASS" in out
+
+
+def test_cli_validate_defaults_to_the_rounded_reference(capsys, monkeypatch) -> None:
+    monkeypatch.chdir(REPO)
+    code, out, _ = run(capsys, "validate", "ur5", "--ik", "tests.broken:sign_flip", "-n", "10",
+                       "--failures", "/dev/null")
+    assert code == 1
+    assert "reference: rounded (generated URDF, 10 significant digits)" in out
+    for outcome in ("missing_branch", "discontinuous"):
+        assert outcome in out
+
+
+def test_cli_validate_vendor_reference_round_trip(capsys, tmp_path, monkeypatch) -> None:
+    """--reference VENDOR.urdf: the report, JSON, Markdown and failure file name it (path and
+    frames) and carry the new outcomes; --replay uses the recorded vendor file again."""
+    monkeypatch.chdir(REPO)
+    files = {name: tmp_path / name for name in ("r.json", "r.md", "f.json", "g.json")}
+    code, out, _ = run(capsys, "validate", "ur5", "--ik", "tests.broken:branch_dropped_off_seed",
+                       "--reference", "../shared/reference/ur5.urdf", "-n", "50",
+                       "--json", str(files["r.json"]), "--report", str(files["r.md"]),
+                       "--failures", str(files["f.json"]))
+    assert code == 1
+    vendor = str((REFERENCE_URDFS / "ur5.urdf").resolve())
+    assert f"reference: vendor {vendor} (base_link -> tool0)" in out
+    report = json.loads(files["r.json"].read_text())
+    assert report["reference"]["kind"] == "vendor" and report["reference"]["path"] == vendor
+    assert report["counts"]["missing_branch"] > 0
+    assert {"missing_branch", "discontinuous"} <= set(report["rates"])
+    assert report["branch_checked"] > 0 and report["continuity_checked"] > 0
+    markdown = files["r.md"].read_text()
+    assert "| missing_branch |" in markdown and "| discontinuous |" in markdown
+    assert f"vendor {vendor} (base_link -> tool0)" in markdown
+    failures = json.loads(files["f.json"].read_text())
+    assert failures["reference"] == report["reference"]
+    recorded = sorted(f["outcome"] for f in failures["failures"])
+    assert "missing_branch" in recorded
+    code, out, _ = run(capsys, "validate", "ur5", "--ik", "tests.broken:branch_dropped_off_seed",
+                       "--replay", str(files["f.json"]), "--json", str(files["g.json"]),
+                       "--failures", str(tmp_path / "h.json"))
+    assert code == 1
+    assert f"reference: vendor {vendor}" in out
+    again = json.loads(files["g.json"].read_text())
+    assert again["reference"] == report["reference"]
+    assert sorted(f["outcome"] for f in again["failures"]) == recorded
+
+
+def test_cli_validate_vendor_frames(capsys, monkeypatch) -> None:
+    """A listed robot's vendor frames are the default (AUBO's file has no tool0); --base and
+    --tip choose others, and a wrong one is a clear error naming the option."""
+    monkeypatch.chdir(REPO)
+    code, out, err = run(capsys, "validate", "aubo_i10", "--ik", "tests.broken:sign_flip",
+                         "--reference", "../shared/reference/aubo_i10.urdf", "-n", "10",
+                         "--failures", "/dev/null")
+    assert code == 1, err
+    assert "aubo_i10.urdf (base_link -> wrist3_Link)" in out
+    code, out, err = run(capsys, "validate", "aubo_i10", "--ik", "tests.broken:sign_flip",
+                         "--reference", "../shared/reference/aubo_i10.urdf", "--tip", "tool0",
+                         "-n", "10")
+    assert code == 2
+    assert "--tip" in err and "no frame named 'tool0'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(("args", "named"), [
+    (["--reference", "no_such_vendor.urdf"], "--reference"),
+    (["--reference", "../shared/reference/ur5.urdf", "--base", "floor"], "--base"),
+    (["--reference", "exact", "--tip", "tool0"], "--tip"),
+    (["-n", "0"], "n: expected at least 1 sample"),
+])
+def test_cli_validate_bad_arguments(capsys, monkeypatch, args: list[str], named: str) -> None:
+    monkeypatch.chdir(REPO)
+    code, _, err = run(capsys, "validate", "ur5", *args)
+    assert code == 2
+    assert named in err and "Traceback" not in err
+
+
+def test_check_runs_the_vendor_validation(capsys) -> None:
+    """`dhkin check` has an "ik vs vendor" column: the IK validated with targets made and
+    solutions checked on the vendor URDF, with every failure kind counted."""
+    code, out, _ = run(capsys, "check", "abb_irb1200_7_70", "--ik-poses", "40",
+                       "--vendor-poses", "40")
+    assert code == 0, out
+    header, _, row = out.splitlines()[:3]
+    assert "ik vs pin" in header and "ik vs vendor" in header
+    assert "abb_irb1200_7_70.urdf: 48 poses" in row
+    for count in ("wrong 0", "missing 0", "missing-branch 0", "discontinuous 0"):
+        assert row.count(count) == 2, row
+    assert row.rstrip().endswith("PASS")
+
+
+def test_check_without_the_vendor_file_fails_its_columns(capsys, tmp_path) -> None:
+    code, out, _ = run(capsys, "check", "ur5", "--reference-dir", str(tmp_path),
+                       "--ik-poses", "10", "--vendor-poses", "10")
+    assert code == 1
+    assert out.count("missing ur5.urdf") == 2

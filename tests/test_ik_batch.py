@@ -1,11 +1,12 @@
 """ik_batch and the compiled pipeline: the same answers as ik, chunking, copies, memory.
 
 Speed is measured by scripts/bench_ik.py (docs/benchmarks.md), never asserted here. What is
-checked: ``ik_batch`` returns pose by pose exactly what ``ik`` returns (the same kernels, the same
-order), whatever the chunk size, streamed or not; ``copies=False`` keeps one copy per branch, the
-one nearest to 0; the compiled family solvers agree with their numpy reference formulations;
+checked: ``ik_batch`` returns pose by pose exactly what ``ik`` returns (one implementation: the
+batch runs the single-pose function per pose), whatever the chunk size, streamed or not; by
+default each branch gives one solution, its in-limit 2pi copy nearest the seed (nearest 0
+without one), and ``copies=True`` every in-limit copy; ``branches`` gives the copies' source;
 the elementary functions of the kernels are accurate to a few ulp; the kernels are safe to call
-from several threads; and a batch of 10^6 poses runs within a bounded amount of memory.
+from several threads; a batch of 10^6 poses runs within a bounded amount of memory.
 """
 
 from __future__ import annotations
@@ -16,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from numba import njit
 
 import dhkin
 from dhkin.errors import IKInputError
-from dhkin.ik import kernels
+from dhkin.ik.compiled import elementary
 from dhkin.ik.result import flag_names
 from dhkin.transforms import pose_error
 
@@ -105,108 +107,77 @@ def test_chunk_sizes_and_streaming_give_identical_results(robot):
     assert seen == len(T)
 
 
-def test_one_copy_per_branch_is_the_copy_nearest_zero(robot):
-    """copies=False: the same branches as copies=True, each the copy with the least |q| (per
-    joint, hence also in sum)."""
+def test_default_is_one_solution_per_branch_its_copy_nearest_the_seed(robot):
+    """copies=False (the default): the same branches as copies=True, each the in-limit copy
+    nearest the seed on every joint (nearest 0 without a seed); the branch's principal value
+    (robot.ik_solver.branches) is a 2pi copy of it."""
     T, seeds = pose_set(robot, 90, seed=9)
-    every = robot.ik_batch_detailed(T, seeds)
-    one = robot.ik_batch_detailed(T, seeds, copies=False)
-    assert one.q.shape[1] <= len(robot.ik_solver.branch_labels)
+    revolute = np.array([j.is_revolute for j in robot.table.joints])
+    for seed in (seeds, None):
+        every = robot.ik_batch_detailed(T, seed, copies=True)
+        one = robot.ik_batch_detailed(T, seed)
+        branches = robot.ik_solver.branches(T, seed)
+        aim = np.zeros_like(seeds) if seed is None else seeds
+        assert one.q.shape[1] <= len(robot.ik_solver.branch_labels)
+        for i in range(len(T)):
+            chosen = one.branch[i][one.valid[i]]
+            assert sorted(chosen) == sorted(set(every.branch[i][every.valid[i]]))
+            for b, q in zip(chosen, one.q[i][one.valid[i]], strict=True):
+                rows = every.q[i][every.valid[i] & (every.branch[i] == b)]
+                assert np.any(np.all(np.abs(rows - q) <= 1e-12, axis=1))
+                distance = np.abs(q - aim[i])
+                assert np.all(distance <= np.abs(rows - aim[i]).min(axis=0) + 1e-12)
+                principal = branches.q[i, b]
+                assert branches.valid[i, b]
+                shift = np.where(revolute, np.mod(q - principal + np.pi, TWO_PI) - np.pi,
+                                 q - principal)
+                assert np.abs(shift).max() <= 1e-9
+
+
+def test_every_copy_inside_the_limits_and_no_other(robot):
+    """copies=True: per branch, exactly the 2pi copies of its principal value that lie inside
+    the joint limits (counted independently here), each exact."""
+    T, seeds = pose_set(robot, 60, seed=10)
+    every = robot.ik_batch_detailed(T, seeds, copies=True)
+    branches = robot.ik_solver.branches(T, seeds)
+    lower, upper = robot.lower, robot.upper
+    revolute = np.array([j.is_revolute for j in robot.table.joints])
     for i in range(len(T)):
-        branches = one.branch[i][one.valid[i]]
-        assert sorted(branches) == sorted(set(every.branch[i][every.valid[i]]))
-        for b, q in zip(branches, one.q[i][one.valid[i]], strict=True):
+        for b in np.flatnonzero(branches.valid[i]):
+            principal = branches.q[i, b]
+            counts = []
+            for j in range(robot.dof):
+                if revolute[j]:
+                    shifts = principal[j] + TWO_PI * np.arange(-4, 5)
+                    counts.append(int(((shifts >= lower[j] - 1e-9)
+                                       & (shifts <= upper[j] + 1e-9)).sum()))
+                else:
+                    counts.append(int(lower[j] <= principal[j] <= upper[j]))
             rows = every.q[i][every.valid[i] & (every.branch[i] == b)]
-            assert np.any(np.all(rows == q, axis=1))  # one of the copies (ties: +-pi)
-            assert np.all(np.abs(q) <= np.abs(rows).min(axis=0))
-
-
-def test_the_copies_are_those_of_the_numpy_expansion(robot):
-    """Generic poses: ik_batch returns, in order, closed_form.expand_turns of the wrapped valid
-    branch solutions (every one exact here), pose by pose; to rounding (the kernels leave a
-    value inside (-pi, pi] as it is where numpy's wrap rounds it, and convert the target to DH
-    frames in their own order of operations)."""
-    from dhkin.ik.closed_form import expand_turns, wrap_revolute
-    from dhkin.transforms import invert
-
-    q = robot.table.random_q(300, np.random.default_rng(16))
-    q = q[np.abs(np.sin(q[:, 4])) > 1e-2]
-    T = robot.table.fk(q)
-    batch = robot.ik_batch_detailed(T)
-    T_dh = invert(robot.table.base) @ T @ invert(robot.table.tool)
-    branches = robot.ik_solver.solve(T_dh, np.zeros_like(q))
-    for i in range(len(q)):
-        principal = wrap_revolute(robot.table, branches.q[i][branches.valid[i]])
-        rows, values = expand_turns(robot.table, principal)
-        np.testing.assert_allclose(batch.q[i][batch.valid[i]], values, rtol=0, atol=1e-11)
-        np.testing.assert_array_equal(batch.branch[i][batch.valid[i]],
-                                      np.flatnonzero(branches.valid[i])[rows])
-
-
-# --------------------------------------------------------------------------------------------
-# Compiled family solvers and their numpy references
-
-
-def test_compiled_solver_follows_the_numpy_reference(robot):
-    """On generic poses (q5 away from 0) both give the same branches, validity and flags, and
-    joint values equal mod 2pi to 1e-9 rad."""
-    rng = np.random.default_rng(10)
-    q = robot.table.random_q(2000, rng)
-    q = q[np.abs(np.sin(q[:, 4])) > 1e-2]
-    T = robot.table.fk(q)
-    from dhkin.transforms import invert
-
-    T_dh = invert(robot.table.base) @ T @ invert(robot.table.tool)
-    seeds = np.zeros_like(q)
-    compiled = robot.ik_solver.solve(T_dh, seeds)
-    reference = robot.ik_solver.solve_reference(T_dh, seeds)
-    np.testing.assert_array_equal(compiled.valid, reference.valid)
-    np.testing.assert_array_equal(compiled.flags, reference.flags)
-    both = compiled.valid & reference.valid
-    gap = np.abs(np.mod(compiled.q - reference.q + np.pi, TWO_PI) - np.pi).max(axis=-1)
-    assert gap[both].max() <= 1e-9
-
-
-def test_a_family_without_a_compiled_solver_runs_through_the_numpy_solve(load_robot):
-    """A solver that only has ``solve`` (a third-party family): the pipeline calls it and does
-    the rest in the kernels; on generic poses it agrees with the compiled family."""
-    from dhkin.ik.closed_form import Pipeline
-
-    robot = load_robot("ur5")
-    compiled_solver = robot.ik_solver
-
-    class Plain:
-        """The UR family through its numpy reference only."""
-
-        branch_labels = compiled_solver.branch_labels
-        family = compiled_solver.family
-
-        def solve(self, T_dh, q_seed):
-            return robot.ik_solver.solve_reference(T_dh, q_seed)
-
-        def explain(self, T_dh):
-            return robot.ik_solver.explain(T_dh)
-
-    pipeline = Pipeline(Plain(), robot.table)
-    assert not pipeline.compiled
-    q = robot.table.random_q(200, np.random.default_rng(18))
-    q = q[np.abs(np.sin(q[:, 4])) > 1e-2]
-    T = np.concatenate([robot.fk(q), robot.fk(q[:2])])
-    T[-2:, :3, 3] += 100.0  # unreachable
-    for copies in (True, False):
-        plain = pipeline.solve_batch(T, copies=copies, chunk_size=37)
-        compiled = robot.ik_batch_detailed(T, copies=copies)
-        np.testing.assert_array_equal(plain.valid, compiled.valid)
-        np.testing.assert_array_equal(plain.branch, compiled.branch)
-        np.testing.assert_allclose(plain.q, compiled.q, rtol=0, atol=1e-9)
-    for i in (0, 1, len(T) - 1):
-        one = pipeline.solve_one(T[i])
-        np.testing.assert_allclose(one.q, robot.ik(T[i]).q, rtol=0, atol=1e-9)
-        assert len(one) == 0 and one.reason if i == len(T) - 1 else one.residuals.max() <= 1e-9
+            assert len(rows) == int(np.prod(counts))
+            assert len({tuple(np.round(r, 9)) for r in rows}) == len(rows)
+            assert np.all((rows >= lower) & (rows <= upper))
+        if every.valid[i].any():
+            values = every.q[i][every.valid[i]]
+            position, rotation = pose_error(robot.reference().fk(values),
+                                            np.broadcast_to(T[i], (len(values), 4, 4)))
+            assert position.max() <= 1e-9 and rotation.max() <= 1e-9
 
 
 # --------------------------------------------------------------------------------------------
 # Elementary functions of the kernels
+
+
+@njit(cache=False)
+def _sincos_array(x: np.ndarray, out: np.ndarray) -> None:
+    for i in range(x.shape[0]):
+        out[i, 0], out[i, 1] = elementary.sincos(x[i])
+
+
+@njit(cache=False)
+def _atan2_array(y: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+    for i in range(x.shape[0]):
+        out[i] = elementary.atan2(y[i], x[i])
 
 
 def test_sincos_within_a_few_ulp_and_the_c_library_beyond_its_range():
@@ -214,12 +185,12 @@ def test_sincos_within_a_few_ulp_and_the_c_library_beyond_its_range():
     x = np.concatenate([rng.uniform(-20, 20, 200_000), np.arange(-16, 17) * np.pi / 4,
                         [0.0, -0.0, 1e-300, -1e-300, 5e-324, 1e6, -3e7, 1e300]])
     out = np.empty((len(x), 2))
-    kernels.sincos_array(x, out)
+    _sincos_array(x, out)
     np.testing.assert_allclose(out[:, 0], np.sin(x), rtol=0, atol=4.5e-16)
     np.testing.assert_allclose(out[:, 1], np.cos(x), rtol=0, atol=4.5e-16)
     special = np.array([np.nan, np.inf, -np.inf])
     out = np.empty((3, 2))
-    kernels.sincos_array(special, out)
+    _sincos_array(special, out)
     assert np.isnan(out).all()
 
 
@@ -231,13 +202,13 @@ def test_atan2_within_a_few_ulp_and_exact_at_zeros_and_infinities():
     y = np.concatenate([y, rng.normal(size=100_000), [1.0, -1.0, 1.0, -1.0, 3.0, 3.0]])
     x = np.concatenate([x, rng.normal(size=100_000), [1.0, 1.0, -1.0, -1.0, 3.0, -3.0]])
     out = np.empty(len(x))
-    kernels.atan2_array(y, x, out)
+    _atan2_array(y, x, out)
     reference = np.arctan2(y, x)
     assert np.all(np.abs(out - reference) <= 2.5 * np.spacing(np.abs(reference)) + 1e-300)
     values = np.array([0.0, -0.0, 1.0, -1.0, np.inf, -np.inf, np.nan])
     ys, xs = (a.ravel() for a in np.meshgrid(values, values))
     out = np.empty(len(xs))
-    kernels.atan2_array(ys, xs, out)
+    _atan2_array(ys, xs, out)
     np.testing.assert_array_equal(out, np.arctan2(ys, xs))
     assert np.signbit(out).tolist() == np.signbit(np.arctan2(ys, xs)).tolist()
 
@@ -266,9 +237,10 @@ def test_ik_takes_any_array_layout_through_the_compiled_entry_point(load_robot):
     """robot.ik calls kernels.solve_one's compiled entry point, which trusts its argument types:
     lists, Fortran order, strided views, read-only and integer arrays must be converted first
     and give the answers of the plain call."""
+    from dhkin.ik.compiled import pipeline
+
     robot = load_robot("ur5")
-    pipeline = robot._ik_pipeline
-    assert pipeline._one_kernel is not kernels.solve_one  # the fast path is in use
+    assert robot.ik_solver._one_kernel is not pipeline.solve_one  # the fast path is in use
     q = robot.table.random_q(50, np.random.default_rng(19))
     T = robot.fk(q)
     for i in range(len(T)):
@@ -298,6 +270,8 @@ def test_bad_inputs_name_the_pose(load_robot):
         robot.ik_batch(bad)
     with pytest.raises(IKInputError, match=r"T\[33\]: rotation block is not a rotation"):
         list(robot.ik_batch_chunks(bad, chunk_size=10))
+    with pytest.raises(IKInputError, match=r"T\[33\]: rotation block is not a rotation"):
+        robot.ik_solver.branches(bad)
     bad[5, 0, 0] = np.nan
     with pytest.raises(IKInputError, match="finite"):
         robot.ik_batch(bad, chunk_size=3)
@@ -306,7 +280,7 @@ def test_bad_inputs_name_the_pose(load_robot):
     with pytest.raises(IKInputError, match=r"q_seed: expected finite values, got .*inf"):
         robot.ik(T[0], q_seed=np.full(6, np.inf))
     with pytest.raises(IKInputError,
-                       match=r"q_seed: expected shape \(6,\) for one pose, got \(5,\)"):
+                       match=r"q_seed: expected shape \(6,\) or \(1, 6\), got \(5,\)"):
         robot.ik(T[0], q_seed=np.zeros(5))
     with pytest.raises(IKInputError, match="chunk_size"):
         robot.ik_batch(T, chunk_size=0)
@@ -323,11 +297,11 @@ def test_a_million_poses_run_within_bounded_memory(load_robot):
     robot = load_robot("abb_irb1200_7_70")
     unique = robot.fk(robot.table.random_q(1000, np.random.default_rng(15)))
     T = np.tile(unique, (1000, 1, 1))  # (10^6, 4, 4), 128 MB, before tracing starts
-    per_pose = robot.ik_batch(unique)[1].sum(axis=1)
+    per_pose = robot.ik_batch(unique, copies=True)[1].sum(axis=1)
     tracemalloc.start()
     try:
         total = 0
-        for start, part in robot.ik_batch_chunks(T):
+        for start, part in robot.ik_batch_chunks(T, copies=True):
             total += int(part.valid.sum())
             rows = (start + np.arange(part.q.shape[0])) % len(unique)
             np.testing.assert_array_equal(part.valid.sum(axis=1), per_pose[rows])
@@ -342,7 +316,8 @@ def test_a_million_poses_run_within_bounded_memory(load_robot):
           f"peak {dense_peak / 2**20:.0f} MiB for a {Q.nbytes / 2**20:.0f} MiB result")
     assert streamed_peak < 128 * 2**20
     n_branches = len(robot.ik_solver.branch_labels)
-    result = len(T) * n_branches * (8 * robot.dof + 4)  # q, valid, flags, branch: B wide
+    # q, valid, flags, branch, residuals (B wide) and the per-branch work arrays (as wide)
+    result = 2 * len(T) * n_branches * (8 * robot.dof + 20)
     assert dense_peak < result + 64 * 2**20
 
 
@@ -354,11 +329,11 @@ def test_streaming_a_ur_arm_with_every_copy_stays_small(load_robot):
     T = np.tile(unique, (100, 1, 1))
     tracemalloc.start()
     try:
-        total = sum(int(part.valid.sum()) for _, part in robot.ik_batch_chunks(T))
+        total = sum(int(part.valid.sum()) for _, part in robot.ik_batch_chunks(T, copies=True))
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
-    assert total == int(robot.ik_batch(unique)[1].sum()) * 100
+    assert total == int(robot.ik_batch(unique, copies=True)[1].sum()) * 100
     print(f"\n10^5 UR5 poses, every copy ({total / len(T):.0f} per pose), streamed: peak "
           f"{peak / 2**20:.0f} MiB")
     assert peak < 128 * 2**20
@@ -366,8 +341,8 @@ def test_streaming_a_ur_arm_with_every_copy_stays_small(load_robot):
 
 def test_copies_nearest_zero_outside_the_principal_range_match_ik(load_robot):
     """IRB 1200, joint 3 in [-200, 70] deg: poses with q3 below -180 deg have a wrapped
-    (principal) value above 70 deg, so copies=False keeps a 2pi copy of it (packed by expand
-    without an FK check of its own). ik_batch gives the same rows as ik, each exact."""
+    (principal) value above 70 deg, so copies=False keeps a 2pi copy of it. ik_batch gives the
+    same rows as ik, each exact."""
     robot = load_robot("abb_irb1200_7_70")
     rng = np.random.default_rng(23)
     q = robot.table.random_q(64, rng)

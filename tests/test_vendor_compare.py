@@ -28,6 +28,7 @@ import dhkin
 from dhkin.compare import DEFAULT_COMPARE_TOLERANCE, compare_with_urdf
 from dhkin.reference import Reference
 from dhkin.transforms import pose_error
+from dhkin.vendors import VENDOR_REFERENCES
 
 from .conftest import DATA, REFERENCE_URDFS, REPO
 from .test_fk_oracle import special_grid
@@ -231,3 +232,21 @@ def test_small_offset_slip_is_measured_exactly() -> None:
     rotation is that angle (to the vendor's 1e-9 rounding)."""
     report = compare_with_urdf(_ur5_variant({"offset": 0.01}, 1), vendor_path("ur5"), n=2000)
     assert report.max_rotation == pytest.approx(math.radians(0.01), abs=TOLERANCE)
+
+
+# --------------------------------------------------------------------------------------------
+# Every built-in robot with a vendor reference (dhkin.vendors), with that reference's frames
+
+
+@pytest.mark.parametrize("name", sorted(VENDOR_REFERENCES))
+def test_every_vendor_reference_matches_its_builtin(name: str) -> None:
+    """Each entry of VENDOR_REFERENCES (what `dhkin check` compares) names a built-in robot and
+    a vendor file whose base -> tip chain equals the table to 1e-9 on 10^3 random q: the new
+    ur5e (plain DH; the vendor rounds pi/2) and the fitted ur5e_calibrated, tm5_900 and
+    kinova_gen3_6dof (corrections) included."""
+    entry = VENDOR_REFERENCES[name]
+    assert name in dhkin.builtin_names()
+    report = compare_with_urdf(dhkin.load(name), REFERENCE_URDFS / entry.file,
+                               base_frame=entry.base, tip=entry.tip, robot_tip=entry.robot_tip,
+                               n=1000, seed=4)
+    assert report.ok, report.summary()

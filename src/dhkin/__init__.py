@@ -3,8 +3,9 @@
 ``dhkin.load(name_or_path)`` returns a :class:`~dhkin.robot.Robot`; see DESIGN.md for the contracts.
 """
 
-from dhkin.dh import DHTable, Joint, load_table, parse_table
+from dhkin.dh import DHTable, Joint, load_table, parse_table, table_to_yaml, write_table
 from dhkin.errors import DHError, DhkinError, FamilyError, RobotNotFoundError, URDFError
+from dhkin.fit import fit_corrections
 from dhkin.robot import Robot, builtin_names, load
 
 __all__ = [
@@ -17,8 +18,11 @@ __all__ = [
     "RobotNotFoundError",
     "URDFError",
     "builtin_names",
+    "fit_corrections",
     "load",
     "load_table",
     "parse_table",
+    "table_to_yaml",
+    "write_table",
 ]
 __version__ = "0.1.0"

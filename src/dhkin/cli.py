@@ -156,17 +156,21 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
     robot = load(args.robot)
     if args.ik is None:
-        ik, name = own_ik(robot), f"dhkin's own IK ({robot.ik_solver.family})"
+        family = robot.ik_solver.family if robot.has_closed_form else "numerical"
+        ik, name = own_ik(robot), f"dhkin's own IK ({family})"
     else:
         ik, name = load_ik(args.ik), args.ik
         if args.deg or args.ik_frame:
             tool = tool_frame_from_robot(robot, args.ik_frame) if args.ik_frame else None
             ik = adapt(ik, degrees=args.deg, tool=tool)
     if args.replay:
-        report = replay(robot, ik, args.replay, ik_name=name)
+        # The failure file names its reference; --reference/--base/--tip override it.
+        report = replay(robot, ik, args.replay, ik_name=name, reference=args.reference,
+                        base=args.base, tip=args.tip)
     else:
         report = validate(robot, ik, n=args.n, seed=args.seed, tolerance=args.tolerance,
-                          progress=sys.stderr.isatty(), ik_name=name)
+                          progress=sys.stderr.isatty(), ik_name=name, reference=args.reference,
+                          base=args.base, tip=args.tip)
     print(report.summary())
     if args.json:
         Path(args.json).write_text(json.dumps(report.to_json(), indent=1), encoding="utf-8")
@@ -174,19 +178,21 @@ def cmd_validate(args: argparse.Namespace) -> int:
         Path(args.report).write_text(report.markdown(), encoding="utf-8")
     if report.failures:
         path = write_failures(report, args.failures or f"{robot.name}_ik_failures.json")
-        print(f"failures written to {path} (rerun: dhkin validate {args.robot} --replay {path}"
-              f"{' --ik ' + args.ik if args.ik else ''})")
+        print(f"failures written to {path} (rerun on the same reference: dhkin validate "
+              f"{args.robot} --replay {path}{' --ik ' + args.ik if args.ik else ''})")
     return EXIT_OK if report.ok else EXIT_FAILED
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    from dhkin.checks import CheckOptions, all_passed, check_robot, format_table
+    from dhkin.checks import VENDOR_POSES, CheckOptions, all_passed, check_robot, format_table
 
     if not args.all and not args.robots:
         raise DhkinError("check: name robots to check, or --all for every built-in robot")
     names = builtin_names() if args.all else args.robots
     reference_dir = Path(args.reference_dir) if args.reference_dir else _default_reference_dir()
-    options = CheckOptions(reference_dir=reference_dir, ik_poses=args.ik_poses, seed=args.seed)
+    options = CheckOptions(reference_dir=reference_dir, ik_poses=args.ik_poses,
+                           vendor_poses=(VENDOR_POSES if args.vendor_poses is None
+                                         else args.vendor_poses), seed=args.seed)
     print(f"built-in robots: {builtin_dir()}", file=sys.stderr)
     print(f"vendor references: {reference_dir or 'not found'}", file=sys.stderr)
     rows = {}
@@ -242,7 +248,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(run=cmd_ik)
 
-    p = sub.add_parser("validate", help="cross-validate an IK against Pinocchio")
+    p = sub.add_parser("validate", help="cross-validate an IK against Pinocchio on a reference "
+                                        "description (rounded, exact or a vendor URDF)")
     _robot_arg(p)
     p.add_argument("--ik", help="module:function of an IK, ik(T) -> joint vectors (default: ours)")
     p.add_argument("-n", type=int, default=10_000, help="uniform samples (default 10000), plus "
@@ -254,7 +261,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", help="write the report as JSON to this file")
     p.add_argument("--report", help="write the report as Markdown to this file")
     p.add_argument("--failures", help="failure file (default <robot>_ik_failures.json)")
-    p.add_argument("--replay", help="rerun the samples of a failure file")
+    p.add_argument("--replay", help="rerun the samples of a failure file (on the reference it "
+                                    "records)")
+    p.add_argument("--reference", help="description that makes the targets and checks the "
+                                       "solutions: 'rounded' (default: the generated URDF with "
+                                       "10 significant digits), 'exact' (the generated URDF) or "
+                                       "a vendor URDF file of the same robot")
+    p.add_argument("--base", help="base frame in the --reference URDF (default: from "
+                                  "dhkin.vendors for a listed robot, else base_link)")
+    p.add_argument("--tip", help="frame of the --reference URDF equal to the table's tool0 "
+                                 "(default: from dhkin.vendors for a listed robot, else tool0)")
     p.set_defaults(run=cmd_validate)
 
     p = sub.add_parser("singularity", help="singularity classes, factored det J and Pinocchio's "
@@ -271,6 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--all", action="store_true", help="check every built-in robot")
     p.add_argument("--reference-dir", help="folder of vendor URDFs (default ../shared/reference)")
     p.add_argument("--ik-poses", type=int, default=10_000, help="IK poses per robot")
+    p.add_argument("--vendor-poses", type=int, default=None,
+                   help="IK poses per robot on its vendor URDF (default 2000)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.set_defaults(run=cmd_check)
     return parser

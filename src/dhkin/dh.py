@@ -8,6 +8,10 @@ Conventions (see DESIGN.md, "The DH table file"):
   table's alpha_i and a_i of row i are Craig's alpha_{i-1} and a_{i-1}; joint i turns about z_i.
 * Revolute joint: ``theta_i = direction_i * q_i + offset_i``. Prismatic joint:
   ``d_i = direction_i * q_i + offset_i`` with ``theta_i`` fixed (key ``theta``).
+* Correction (optional, per joint): a constant transform ``C_i = Trans(xyz) Rz(y) Ry(p) Rx(r)``
+  that follows row i in both conventions, ``A_i = (DH row i) @ C_i``. Calibrated or rounded
+  descriptions are written exactly this way; the table without its corrections is the robot's
+  *nominal* table (:meth:`DHTable.nominal`).
 * ``T(q) = base @ A_1 ... A_n @ tool``: base_link -> DH frame 0 -> DH frame n -> tool0.
 * ``flange`` (optional): DH frame n -> the URDF's ``flange`` frame; default rpy (0, -90, 0) deg,
   which puts the flange's x axis along the last joint axis (ROS-Industrial). Vendors differ in
@@ -18,10 +22,11 @@ Inside a :class:`DHTable` everything is SI: metres and radians (m/s, rad/s for v
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -30,7 +35,7 @@ import yaml
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.errors import DHError
-from dhkin.transforms import xyz_rpy_to_matrix
+from dhkin.transforms import rot_y, rot_z, xyz_rpy_to_matrix
 
 Convention = Literal["standard", "modified"]
 JointType = Literal["revolute", "prismatic"]
@@ -47,7 +52,10 @@ _TOP_KEYS_OPTIONAL = ("description", "source", "base", "tool", "flange")
 #: Default DH frame n -> flange: x along the last joint axis (ROS-Industrial), rpy (0, -90, 0) deg.
 DEFAULT_FLANGE_RPY_DEG = (0.0, -90.0, 0.0)
 _JOINT_KEYS_COMMON = ("name", "link", "type", "a", "alpha", "offset", "direction", "lower",
-                      "upper", "velocity", "effort")
+                      "upper", "velocity", "effort", "correction")
+_FRAME_KEYS = ("xyz", "rpy")
+#: A joint without a correction: (x, y, z) m, (roll, pitch, yaw) rad, all zero.
+NO_CORRECTION: tuple[float, float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 _NAME_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_\-]*$")
 
 
@@ -58,6 +66,8 @@ class Joint:
     ``d`` is the fixed offset along z for a revolute joint; ``theta`` the fixed angle for a
     prismatic one. ``offset`` is added to the joint variable (rad for revolute, m for prismatic).
     ``lower``/``upper`` bound the joint value q (URDF convention, before direction and offset).
+    ``correction`` = (x, y, z, roll, pitch, yaw) in m and rad: the constant transform
+    :attr:`correction_matrix` that follows the row's DH transform (all zero: none).
     """
 
     name: str
@@ -73,10 +83,21 @@ class Joint:
     upper: float
     velocity: float
     effort: float
+    correction: tuple[float, float, float, float, float, float] = NO_CORRECTION
 
     @property
     def is_revolute(self) -> bool:
         return self.type == "revolute"
+
+    @property
+    def has_correction(self) -> bool:
+        """Whether any component of the correction is non-zero."""
+        return any(value != 0.0 for value in self.correction)
+
+    @property
+    def correction_matrix(self) -> NDArray[np.float64]:
+        """C_i = Trans(x, y, z) @ Rz(yaw) Ry(pitch) Rx(roll), 4x4 (identity without one)."""
+        return xyz_rpy_to_matrix(self.correction[:3], self.correction[3:])
 
 
 @dataclass(frozen=True)
@@ -109,6 +130,16 @@ class DHTable:
     def joint_names(self) -> list[str]:
         return [j.name for j in self.joints]
 
+    @property
+    def corrected(self) -> bool:
+        """Whether any joint carries a correction (the table is not a plain DH table)."""
+        return any(j.has_correction for j in self.joints)
+
+    def nominal(self) -> DHTable:
+        """The same table with every correction removed (the robot's nominal DH table)."""
+        joints = tuple(replace(j, correction=NO_CORRECTION) for j in self.joints)
+        return replace(self, joints=joints)
+
     def dh_parameters(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """theta (N, n) and d (N, n) for joint values q of shape (N, n)."""
         Q = np.asarray(q, dtype=float)
@@ -121,15 +152,22 @@ class DHTable:
         return theta, d
 
     def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
-        """A_i(q) for every joint: (N, n) joint values -> (N, n, 4, 4)."""
+        """A_i(q) @ C_i for every joint (C_i: the joint's correction, identity without one):
+        (N, n) joint values -> (N, n, 4, 4)."""
         Q = _as_batch(q, self.dof)
         theta, d = self.dh_parameters(Q)
         a = np.array([j.a for j in self.joints])
         alpha = np.array([j.alpha for j in self.joints])
-        return dh_matrices(self.convention, theta, d, a, alpha)
+        A = dh_matrices(self.convention, theta, d, a, alpha)
+        for i, joint in enumerate(self.joints):
+            if joint.has_correction:
+                A[:, i] = A[:, i] @ joint.correction_matrix
+        return A
 
     def fk_frames(self, q: ArrayLike) -> NDArray[np.float64]:
-        """base_link -> DH frames 0..n, shape (N, n + 1, 4, 4) for q of shape (N, n)."""
+        """base_link -> DH frames 0..n, shape (N, n + 1, 4, 4) for q of shape (N, n).
+
+        Frame i is ``base @ A_1 C_1 ... A_i C_i``: it includes row i's correction."""
         A = self.link_transforms(q)
         N = A.shape[0]
         frames = np.empty((N, self.dof + 1, 4, 4))
@@ -422,14 +460,36 @@ def _joint(entry: Any, index: int, where: _Where, length_scale: float,
             raise DHError(where.msg(f"{label}.{key}", f"expected an angle within +-360 deg "
                                     f"(+-2pi rad), got {entry[key]!r} {unit}; are units.angle "
                                     f"right?"))
+    correction = (_correction(entry["correction"], where, f"{label}.correction", length_scale,
+                              angle_scale) if "correction" in entry else NO_CORRECTION)
     return Joint(
         name=name, link=link, type=joint_type,
         a=num("a") * length_scale, alpha=num("alpha") * angle_scale,
         d=num("d") * length_scale if revolute else 0.0,
         theta=0.0 if revolute else num("theta") * angle_scale,
         offset=num("offset") * variable_scale, direction=int(direction),
-        lower=lower, upper=upper, velocity=velocity, effort=effort,
+        lower=lower, upper=upper, velocity=velocity, effort=effort, correction=correction,
     )
+
+
+def _correction(value: Any, where: _Where, field_name: str, length_scale: float,
+                angle_scale: float) -> tuple[float, float, float, float, float, float]:
+    """A joint's ``correction: {xyz: [x, y, z], rpy: [r, p, y]}`` (table units) -> SI 6-tuple."""
+    if not isinstance(value, Mapping):
+        raise DHError(where.msg(field_name, "expected a mapping {xyz: [x, y, z], rpy: [r, p, y]}, "
+                                            f"got {value!r}"))
+    _check_keys(value, (), _FRAME_KEYS, where, f"{field_name}.")
+    xyz = _vector3(value.get("xyz", [0, 0, 0]), where, f"{field_name}.xyz")
+    rpy = _vector3(value.get("rpy", [0, 0, 0]), where, f"{field_name}.rpy")
+    for k, angle in enumerate(rpy):
+        if abs(angle * angle_scale) > 2 * math.pi + 1e-9:
+            unit = "deg" if angle_scale != 1.0 else "rad"
+            raise DHError(where.msg(f"{field_name}.rpy[{k}]", "expected an angle within +-360 deg "
+                                    f"(+-2pi rad), got {value['rpy'][k]!r} {unit}; are "
+                                    "units.angle right?"))
+    x, y, z = (v * length_scale for v in xyz)
+    roll, pitch, yaw = (v * angle_scale for v in rpy)
+    return (x, y, z, roll, pitch, yaw)
 
 
 def _check_unique(names: list[str], where: _Where, key: str) -> None:
@@ -440,3 +500,143 @@ def _check_unique(names: list[str], where: _Where, key: str) -> None:
                                                           f"joints[{seen[n]}]); expected unique "
                                                           f"{key}s"))
         seen[n] = i
+
+
+# --------------------------------------------------------------------------------------------
+# Writing
+
+#: Units :func:`table_to_yaml` writes by default: metres and radians, so that every number
+#: round-trips exactly (``repr`` of the float, read back with a scale of 1).
+EXACT_UNITS: dict[str, str] = {"length": "m", "angle": "rad"}
+_WRITE_WIDTH = 100
+#: Below this cos(pitch), :func:`exact_rpy` sets yaw to 0 and lets roll take the whole turn.
+_EXACT_GIMBAL = 1e-15
+
+
+def table_to_yaml(table: DHTable, units: Mapping[str, str] | None = None,
+                  header: str | None = None) -> str:
+    """The text of a table file that :func:`load_table` reads back as ``table``.
+
+    ``units`` = ``{"length": "m" | "mm", "angle": "rad" | "deg"}`` (default m and rad). In m/rad
+    every joint value, limit and correction is written as ``repr(float)`` and read back bit for
+    bit; base, tool and flange are written as xyz + rpy, whose matrices are rebuilt to ~1e-16,
+    so the FK of the table read back equals the original's to ~1e-15. Other units scale each
+    number (exact to ~1 ulp). Corrections are written only for joints that have one; base, tool
+    and flange always. ``header`` (optional) is written first as ``#`` comment lines.
+    """
+    units = dict(EXACT_UNITS if units is None else units)
+    if set(units) != {"length", "angle"} or units["length"] not in LENGTH_UNITS \
+            or units["angle"] not in ANGLE_UNITS:
+        raise DHError(f"units: expected {{'length': m|mm, 'angle': rad|deg}}, got {units!r}")
+    length_scale = LENGTH_UNITS[units["length"]]
+    angle_scale = ANGLE_UNITS[units["angle"]]
+
+    def length(value: float) -> str:
+        return _yaml_number(value / length_scale if length_scale != 1.0 else value)
+
+    def angle(value: float) -> str:
+        return _yaml_number(math.degrees(value) if angle_scale != 1.0 else value)
+
+    def vector(values: Sequence[float], fmt: Any) -> str:
+        return "[" + ", ".join(fmt(float(v)) for v in values) + "]"
+
+    def frame(T: NDArray[np.float64]) -> str:
+        return (f"{{xyz: {vector(T[:3, 3], length)}, "
+                f"rpy: {vector(exact_rpy(T), angle)}}}")
+
+    lines = [f"# {line}".rstrip() for line in (header or "").splitlines()]
+    lines.append(_yaml_pair("name", table.name))
+    if table.description:
+        lines.append(_yaml_pair("description", table.description))
+    if table.source:
+        lines.append(_yaml_pair("source", table.source))
+    lines += [
+        f"convention: {table.convention}",
+        f"units: {{length: {units['length']}, angle: {units['angle']}}}",
+        f"base: {frame(table.base)}",
+        f"tool: {frame(table.tool)}",
+        f"flange: {frame(table.flange)}",
+        "joints:",
+    ]
+    for joint in table.joints:
+        variable = angle if joint.is_revolute else length
+        items = [f"name: {_yaml_plain(joint.name)}", f"link: {_yaml_plain(joint.link)}"]
+        if not joint.is_revolute:
+            items.append("type: prismatic")
+        items += [f"a: {length(joint.a)}", f"alpha: {angle(joint.alpha)}"]
+        items.append(f"d: {length(joint.d)}" if joint.is_revolute
+                     else f"theta: {angle(joint.theta)}")
+        items += [f"offset: {variable(joint.offset)}", f"direction: {joint.direction}",
+                  f"lower: {variable(joint.lower)}", f"upper: {variable(joint.upper)}",
+                  f"velocity: {variable(joint.velocity)}", f"effort: {_yaml_number(joint.effort)}"]
+        if joint.has_correction:
+            items.append(f"correction: {{xyz: {vector(joint.correction[:3], length)}, "
+                         f"rpy: {vector(joint.correction[3:], angle)}}}")
+        lines += _wrap_flow(items, first="  - {", rest="     ")
+    return "\n".join(lines) + "\n"
+
+
+def write_table(table: DHTable, path: str | Path, units: Mapping[str, str] | None = None,
+                header: str | None = None) -> Path:
+    """Write :func:`table_to_yaml` of ``table`` to ``path``; return the path."""
+    file = Path(path)
+    file.write_text(table_to_yaml(table, units, header), encoding="utf-8")
+    return file
+
+
+def _yaml_number(value: float) -> str:
+    """A float as YAML text that PyYAML reads back as the same value (integers without '.0')."""
+    if value == 0.0:
+        return "0"
+    if float(value).is_integer() and abs(value) < 1e15:
+        return str(int(value))
+    text = repr(float(value))
+    if "e" in text and "." not in text:  # YAML 1.1 floats need a dot: 1e-05 -> 1.0e-05
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}.0e{exponent}"
+    return text
+
+
+def _yaml_plain(text: str) -> str:
+    """A name as a plain YAML scalar when it reads back as the same text, else quoted."""
+    try:
+        plain = yaml.safe_load(text) == text
+    except yaml.YAMLError:
+        plain = False
+    return text if plain else json.dumps(text)
+
+
+def _yaml_pair(key: str, text: str) -> str:
+    """``key: text`` as YAML, folded and quoted by PyYAML as needed."""
+    return yaml.safe_dump({key: text}, width=_WRITE_WIDTH - 8, allow_unicode=True,
+                          sort_keys=False).rstrip("\n")
+
+
+def _wrap_flow(items: list[str], first: str, rest: str) -> list[str]:
+    """``first`` + items joined by ', ' + '}', broken into lines of at most _WRITE_WIDTH."""
+    lines: list[str] = []
+    current = first
+    for k, item in enumerate(items):
+        piece = item + ("}" if k == len(items) - 1 else ",")
+        fresh = current in (first, rest)
+        candidate = current + ("" if fresh else " ") + piece
+        if len(candidate) > _WRITE_WIDTH and not fresh:
+            lines.append(current)
+            current = rest + piece
+        else:
+            current = candidate
+    lines.append(current)
+    return lines
+
+
+def exact_rpy(T: NDArray[np.float64]) -> tuple[float, float, float]:
+    """URDF rpy of a rotation, with roll recomputed from pitch and yaw so that the rebuilt matrix
+    equals the given one to ~1e-16, also near gimbal lock (where
+    :func:`dhkin.transforms.matrix_to_rpy` snaps the pitch to +-pi/2 within 1e-12)."""
+    M = np.asarray(T, dtype=float)[:3, :3]
+    cos_pitch = float(np.hypot(M[0, 0], M[1, 0]))
+    pitch = float(np.arctan2(-M[2, 0], cos_pitch))
+    yaw = float(np.arctan2(M[1, 0], M[0, 0])) if cos_pitch > _EXACT_GIMBAL else 0.0
+    rest = (rot_y(pitch)[:3, :3].T @ rot_z(yaw)[:3, :3].T) @ M
+    roll = float(np.arctan2(rest[2, 1] - rest[1, 2], rest[1, 1] + rest[2, 2]))
+    return roll, pitch, yaw

@@ -12,8 +12,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable, load_table
 from dhkin.errors import FamilyError, RobotNotFoundError
-from dhkin.ik.closed_form import DEFAULT_CHUNK, DEFAULT_TOLERANCE, BranchSolver, Pipeline
 from dhkin.ik.result import IKBatch, IKSolutions
+from dhkin.ik.solver import DEFAULT_CHUNK, DEFAULT_TOLERANCE, ClosedFormSolver
 from dhkin.reference import Reference
 from dhkin.urdf import GeneratedFiles, generate
 
@@ -111,68 +111,70 @@ class Robot:
         return Reference(self.urdf(), tip="tool0", source=f"{self.name}.urdf")
 
     @cached_property
-    def ik_solver(self) -> BranchSolver:
-        """The closed-form solver of this robot's family (FamilyError if none fits)."""
-        from dhkin.ik.family import solver_for
+    def ik_solver(self) -> ClosedFormSolver:
+        """The closed-form solver of this robot's family (FamilyError if none fits within the
+        band, naming what each family lacks; see dhkin.ik.family)."""
+        solver = self._closed_form_solver
+        if solver is None:
+            from dhkin.ik.family import fit_family
 
-        return solver_for(self.table)
+            fit_family(self.table)  # raises the FamilyError
+        assert solver is not None
+        return solver
 
     @cached_property
-    def _closed_form_solver(self) -> BranchSolver | None:
-        """The closed-form solver of this robot's family, or None when no family fits (cached:
-        a cached_property does not cache the FamilyError of :attr:`ik_solver`)."""
+    def _closed_form_solver(self) -> ClosedFormSolver | None:
+        """The closed-form solver, or None when no family fits (cached: a cached_property does
+        not cache the FamilyError of :attr:`ik_solver`)."""
+        from dhkin.ik.family import fit_family
+
         try:
-            return self.ik_solver
+            return ClosedFormSolver(self.table, fit_family(self.table))
         except FamilyError:
             return None
 
     @property
     def has_closed_form(self) -> bool:
-        """Whether a closed-form IK family fits this robot's table."""
+        """Whether a closed-form IK family fits this robot's table (within the band)."""
         return self._closed_form_solver is not None
-
-    @cached_property
-    def _ik_pipeline(self) -> Pipeline | None:
-        """The closed-form pipeline (compiled constants built once), or None without a family."""
-        solver = self._closed_form_solver
-        return None if solver is None else Pipeline(solver, self.table)
 
     def ik(self, T: ArrayLike, q_seed: ArrayLike | None = None,
            tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
-           copies: bool = True) -> IKSolutions:
-        """Every solution for pose ``T`` (base_link -> tool0) within the joint limits.
+           copies: bool = False) -> IKSolutions:
+        """The solutions for pose ``T`` (base_link -> tool0, 4x4 m) within the joint limits.
 
-        Each solution is verified by FK to ``tolerance`` (m and rad). At a singularity the free
-        joint is taken from ``q_seed`` (default 0) and the solution is flagged. With ``tcp``
-        (tool0 -> TCP, 4x4) the target ``T`` is the pose of that TCP instead of tool0. With
-        ``copies=False`` each branch gives one solution, not all its 2pi-shifted copies: the one
-        with each joint nearest to 0 (see dhkin.ik.closed_form).
+        One solution per branch: its in-limit 2pi copy nearest ``q_seed`` (nearest 0 without
+        one); ``copies=True`` lists every in-limit copy. Each solution is verified by FK on the
+        exact chain to ``tolerance`` (m and rad). At a singularity the free joint is taken from
+        ``q_seed`` wherever that verifies, and the solution is flagged. With ``tcp`` (tool0 ->
+        TCP, 4x4) the target ``T`` is the pose of that TCP instead of tool0. A rotation block
+        off orthonormal by rounding is projected onto the nearest rotation
+        (``result.projection`` says how far). An empty result's ``reason`` says why.
 
         When no closed-form family fits, the numerical solver answers (``result.numerical`` is
         True, family "numerical"): the solution from the seed's basin first, not necessarily
         every solution.
         """
-        pipeline = self._ik_pipeline
-        if pipeline is None:
+        solver = self._closed_form_solver
+        if solver is None:
             from dhkin.ik.numerical import solver_for_robot
 
             return solver_for_robot(self).solve(T, q_seed, tolerance=tolerance, tcp=tcp)
-        return pipeline.solve_one(T, q_seed, tolerance, tcp, copies)
+        return solver.solve_one(T, q_seed, tolerance, tcp, copies)
 
     def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                  tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
-                 copies: bool = True, chunk_size: int = DEFAULT_CHUNK
+                 copies: bool = False, chunk_size: int = DEFAULT_CHUNK
                  ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m).
 
         The same solutions as :meth:`ik` pose by pose, in the same order; rows are padded to the
-        largest count m. ``copies=False``: one solution per branch (m <= 8). Poses run in chunks
-        of ``chunk_size``; memory is the input and the output (with every copy a UR arm's +-360
-        deg joints give 256 or more solutions per pose: see :meth:`ik_batch_chunks` for very
-        large batches). Without a closed-form family the numerical solver answers (``copies``
-        and ``chunk_size`` do not apply).
+        largest count m (m <= 8 without copies; with every copy a UR arm's +-360 deg joints give
+        up to 256 or more per pose: see :meth:`ik_batch_chunks` for very large batches).
+        Without a closed-form family the numerical solver answers (``copies`` and
+        ``chunk_size`` do not apply).
         """
-        if self._ik_pipeline is None:
+        if self._closed_form_solver is None:
             from dhkin.ik.numerical import solver_for_robot
 
             return solver_for_robot(self).solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)
@@ -181,25 +183,18 @@ class Robot:
 
     def ik_batch_detailed(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                           tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
-                          copies: bool = True, chunk_size: int = DEFAULT_CHUNK) -> IKBatch:
-        """Like :meth:`ik_batch`, with singularity flags and branch indices."""
-        return self._pipeline_or_raise().solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size)
+                          copies: bool = False, chunk_size: int = DEFAULT_CHUNK) -> IKBatch:
+        """Like :meth:`ik_batch`, with flags, branch indices, residuals and projections."""
+        return self.ik_solver.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size)
 
     def ik_batch_chunks(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                         tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
-                        copies: bool = True, chunk_size: int | None = None
+                        copies: bool = False, chunk_size: int | None = None
                         ) -> Iterator[tuple[int, IKBatch]]:
         """:meth:`ik_batch_detailed` chunk by chunk, for batches too large to hold at once:
         yields (index of the chunk's first pose, IKBatch of poses ``start:start + len``), each
-        chunk padded to its own largest count. Memory: the input and one chunk's results; the
-        default chunk size keeps those within about 64 MiB (closed_form.STREAM_BYTES)."""
-        return self._pipeline_or_raise().solve_chunks(T, q_seed, tolerance, tcp, copies, chunk_size)
-
-    def _pipeline_or_raise(self) -> Pipeline:
-        pipeline = self._ik_pipeline
-        if pipeline is None:  # ik_solver raises the FamilyError naming what each family lacks
-            return Pipeline(self.ik_solver, self.table)
-        return pipeline
+        chunk padded to its own largest count (default chunks hold about 64 MiB of output)."""
+        return self.ik_solver.solve_chunks(T, q_seed, tolerance, tcp, copies, chunk_size)
 
     def singularity(self, q: ArrayLike,
                     thresholds: Thresholds | Mapping[str, float] | None = None

@@ -4,8 +4,9 @@ Frames of the generated description (DESIGN.md, "Frames and names"):
 
 * ``base_link``: the robot's root; ``base``: DH frame 0 (= base_link @ table.base), a fixed frame.
 * ``link_i`` (or the table's link name): the frame joint i moves. With the modified convention it
-  is DH frame i; with the standard convention it is DH frame i-1 turned by theta_i (resp. shifted
-  by d_i), because a standard DH row places the joint at the start of the row.
+  is DH frame i (before row i's correction, if any); with the standard convention it is DH frame
+  i-1 (after row i-1's correction) turned by theta_i (resp. shifted by d_i), because a standard DH
+  row places the joint at the start of the row. The axis is always z of the joint's link frame.
 * ``flange``: DH frame n @ table.flange (default: x along the last joint's axis, ROS-Industrial).
 * ``tool0``: DH frame n @ table.tool, z out of the flange.
 
@@ -25,12 +26,22 @@ import numpy as np
 import xacro
 from numpy.typing import NDArray
 
-from dhkin.dh import DHTable, Joint
+from dhkin.dh import DHTable, Joint, exact_rpy
 from dhkin.errors import URDFError
-from dhkin.transforms import invert, matrix_to_rpy, rot_x, rot_z, translation
+from dhkin.transforms import (
+    invert,
+    matrix_to_rpy,
+    rot_x,
+    rot_z,
+    translation,
+    xyz_rpy_to_matrix,
+)
 
 #: Values below this (m or rad) are written as 0 in generated files (they come from cos(pi/2)).
 ZERO_SNAP = 1e-15
+#: An origin's rpy must rebuild its rotation to this; near gimbal lock (a corrected table's
+#: pitch within 1e-12 of +-90 deg) dhkin.dh.exact_rpy replaces the plain conversion.
+RPY_TOLERANCE = 1e-15
 
 
 @dataclass(frozen=True)
@@ -60,14 +71,16 @@ def joint_origins(table: DHTable) -> tuple[list[NDArray[np.float64]], NDArray[np
         modified, revolute:   before = Rx(alpha) Tx(a) Rz(offset) Tz(d)    after = I
         modified, prismatic:  before = Rx(alpha) Tx(a) Rz(theta) Tz(offset) after = I
 
-    and ``origin_i = after_{i-1} @ before_i`` with ``after_0 = table.base``.
+    and ``origin_i = after_{i-1} @ C_{i-1} @ before_i`` with ``after_0 @ C_0 = table.base``, where
+    ``C_i`` is row i's correction (identity without one; it follows the row's DH transform), so
+    the tail is ``after_n @ C_n``.
     """
     origins = []
     previous_after = table.base
     for joint in table.joints:
         before, after = _row_split(table.convention, joint)
         origins.append(previous_after @ before)
-        previous_after = after
+        previous_after = after @ joint.correction_matrix if joint.has_correction else after
     return origins, previous_after
 
 
@@ -93,7 +106,11 @@ def _fmt(value: float) -> str:
 
 def _origin(T: NDArray[np.float64]) -> str:
     xyz = " ".join(_fmt(v) for v in T[:3, 3])
-    rpy = " ".join(_fmt(v) for v in matrix_to_rpy(T))
+    angles = matrix_to_rpy(T)
+    rebuilt = xyz_rpy_to_matrix(T[:3, 3], angles)
+    if np.abs(rebuilt[:3, :3] - T[:3, :3]).max() > RPY_TOLERANCE:  # near gimbal lock
+        angles = exact_rpy(T)
+    rpy = " ".join(_fmt(v) for v in angles)
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
@@ -106,13 +123,20 @@ def _row_comment(table: DHTable, index: int) -> str:
     else:
         parts += [f"theta={_fmt(math.degrees(joint.theta))} deg", f"offset={_fmt(joint.offset)} m"]
     parts.append(f"direction={joint.direction:+d}")
+    if joint.has_correction:
+        xyz = ", ".join(_fmt(v) for v in joint.correction[:3])
+        rpy = ", ".join(_fmt(math.degrees(v)) for v in joint.correction[3:])
+        parts.append(f"correction xyz=({xyz}) m rpy=({rpy}) deg")
     row = index + 1
+    previous = table.joints[index - 1] if row > 1 else None
+    corrected = " and its correction" if previous is not None and previous.has_correction else ""
     if table.convention == "modified":
-        origin = f"origin = row {row} before its motion"
+        origin = (f"origin = row {row - 1}'s correction, then row {row} before its motion"
+                  if corrected else f"origin = row {row} before its motion")
     elif row == 1:
         origin = "origin = base, then row 1 before its motion"
     else:
-        origin = f"origin = the rest of row {row - 1}, then row {row} before its motion"
+        origin = f"origin = the rest of row {row - 1}{corrected}, then row {row} before its motion"
     return f"<!-- {table.convention} DH row {row}: " + ", ".join(parts) + f"; {origin} -->"
 
 

@@ -2,6 +2,8 @@
 
 :data:`VENDOR_REFERENCES` maps a built-in robot's name to a :class:`VendorReference`: the vendor
 URDF's file name and the frames that correspond to the table's ``base_link`` and ``tool0``.
+The tables of ur5e_calibrated, tm5_900 and kinova_gen3_6dof are fitted to these files
+(scripts/fit_tables.py, dhkin.fit_corrections): their corrections reproduce them exactly.
 """
 
 from __future__ import annotations
@@ -27,4 +29,8 @@ VENDOR_REFERENCES: dict[str, VendorReference] = {
     "ur3": VendorReference("ur3.urdf", "base_link", "tool0"),
     "ur5": VendorReference("ur5.urdf", "base_link", "tool0"),
     "ur10": VendorReference("ur10.urdf", "base_link", "tool0"),
+    "ur5e": VendorReference("ur5e.urdf", "base_link", "tool0"),
+    "ur5e_calibrated": VendorReference("ur5e_calibrated.urdf", "base_link", "tool0"),
+    "tm5_900": VendorReference("tm5_900.urdf", "link_0", "flange"),
+    "kinova_gen3_6dof": VendorReference("kinova_gen3_6dof.urdf", "base_link", "end_effector_link"),
 }

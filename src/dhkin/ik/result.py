@@ -47,8 +47,11 @@ class IKSolutions:
     """Every IK solution of one pose within the joint limits, each verified by FK.
 
     ``q`` has shape (k, n); ``configurations[i]`` and ``flags[i]`` describe ``q[i]``. An empty
-    result carries the ``reason`` why. ``residuals`` are (position m, rotation rad) per solution.
-    ``numerical`` is True when the solutions come from the numerical solver.
+    result carries the ``reason`` why (always a true statement). ``residuals`` are (position m,
+    rotation rad) per solution. ``numerical`` is True when the solutions come from the numerical
+    solver. ``projection``: how far the input's rotation block was moved onto the nearest
+    rotation (Frobenius norm; the solutions are exact for the projected pose). ``dropped``:
+    branches whose candidate did not converge or verify on the exact chain (never returned).
     """
 
     q: NDArray[np.float64]
@@ -58,6 +61,8 @@ class IKSolutions:
     reason: str = ""
     family: str = ""
     numerical: bool = False
+    projection: float = 0.0
+    dropped: int = 0
 
     def __len__(self) -> int:
         return int(self.q.shape[0])
@@ -91,7 +96,9 @@ class IKSolutions:
 @dataclass(frozen=True)
 class IKBatch:
     """IK of N poses: ``q`` (N, m, n), ``valid`` (N, m), ``flags`` (N, m) uint8 bits, ``branch``
-    (N, m) index into ``branch_labels`` (-1 where not valid). Rows are padded to the largest m."""
+    (N, m) index into ``branch_labels`` (-1 where not valid). Rows are padded to the largest m.
+    ``residuals`` (N, m, 2): position (m) and rotation (rad) error per solution; ``projection``
+    (N,) and ``dropped`` (N,) as in :class:`IKSolutions`."""
 
     q: NDArray[np.float64]
     valid: NDArray[np.bool_]
@@ -99,7 +106,26 @@ class IKBatch:
     branch: NDArray[np.int16]
     branch_labels: tuple[Mapping[str, str], ...]
     family: str
+    residuals: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 0, 2)))
+    projection: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    dropped: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
 
     def counts(self) -> NDArray[np.int64]:
         """Number of solutions of each pose, (N,)."""
         return self.valid.sum(axis=1)
+
+
+@dataclass(frozen=True)
+class BranchSolutions:
+    """The closed form's verified solution per branch of N poses, before joint limits and 2pi
+    copies: ``q`` (N, B, n) with revolute values in (-pi, pi] (zeros where not ``valid``),
+    ``valid`` (N, B), ``flags`` (N, B) singularity bits, ``residuals`` (N, B, 2) position (m)
+    and rotation (rad) errors, ``dropped`` (N,) branches that did not settle on the exact chain.
+    Branches merged at a singularity (the two wrist branches at q5 = 0) are one valid row."""
+
+    q: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    flags: NDArray[np.uint8]
+    residuals: NDArray[np.float64]
+    branch_labels: tuple[Mapping[str, str], ...]
+    dropped: NDArray[np.int64]

@@ -1,0 +1,469 @@
+"""One pose, start to end: the closed-form IK pipeline (batches run the same function per pose).
+
+For a target T (4, 4), base_link -> TCP:
+
+1. check it (:func:`.pose.status`) and project its rotation onto the nearest rotation;
+   ``T_dh = base^-1 T (tool tcp)^-1`` is DH frame 0 -> DH frame n;
+2. the family's closed form on the *ideal* model (the table's nominal geometry within the band
+   of its family, see :mod:`dhkin.ik.family`) gives 8 branch candidates. Where a joint is free
+   at a singularity within the seed band (the ``near`` bits: wrist, wrist centre on axis 1 or
+   2), the family runs a second time taking that joint from the seed;
+3. each candidate is wrapped to (-pi, pi], refined on the exact chain when the table needs it
+   (Newton, :func:`.chain.refine`; where that fails, by continuation along a path of models
+   from the ideal one to the exact chain, :func:`.chain.refine_along`; a seeded candidate keeps
+   its seeded joints fixed) and
+   verified by FK on the exact chain: errors at most ``tolerance`` in metres and radians. Where
+   the seeded candidate verifies it is the branch's answer (continuous in the seed), else the
+   regular one; a branch neither of whose candidates verifies is dropped and counted. The two
+   wrist branches of an arm branch that both answer with the seed's wrist are one solution (the
+   one with the smaller error). On a refined table, branches that converged to the same
+   solution (within 2 MERGE_ANGLE on every joint, mod 2pi) are one;
+4. 2pi copies inside the joint limits (:mod:`.copies`): with ``copies`` every copy, else per
+   branch the copy nearest the seed. A value within ``slack`` outside a limit is set onto it;
+   such a copy, and every copy of a branch whose error is within :data:`COPY_MARGIN` of the
+   tolerance, is verified again.
+
+``clamp``: reach conditions violated by at most tolerance + the model deviation (metres; 0 for
+an exact-family table) are clamped onto their boundary and verified, not rejected: a pose whose
+joint values verify is never answered empty. ``slack`` = tolerance / lever, lever = max(1 m,
+table scale): the largest move of one joint that keeps the pose within the tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dhkin.ik.compiled import chain as exact
+from dhkin.ik.compiled.bands import CLAMPED, ELBOW, FREE, MERGE_ANGLE, SHOULDER, WRIST
+from dhkin.ik.compiled.copies import nearest_turn, placed, turn_range, wrap
+from dhkin.ik.compiled.jit import jit
+from dhkin.ik.compiled.layout import layout
+from dhkin.ik.compiled.offset import solve_offset_wrist
+from dhkin.ik.compiled.pose import STATUS_BAD_SEED, project, status, to_dh
+from dhkin.ik.compiled.spherical import solve_spherical_wrist, solve_stanford
+
+# Family ids.
+SPHERICAL_WRIST, STANFORD, OFFSET_WRIST = 1, 2, 3
+#: Branches of every family.
+BRANCHES = 8
+#: A 2pi shift changes FK by rounding only: sin/cos of q + 2pi k carry an error of ~|q + 2pi k|
+#: ulp, ~1.4e-15 rad per joint for |q| <= 4pi, so at most ~2e-14 (m per m of arm, rad) for six
+#: joints. Copies of a branch whose error is within this margin of the tolerance (500 times that
+#: bound) are verified themselves.
+COPY_MARGIN = 1e-11
+
+#: The constants of one robot's solver (see :func:`dhkin.ik.solver.plan_array`).
+PLAN = layout("Plan", [
+    ("family", 1), ("dof", 1), ("refine", 1),
+    ("seed_angle", 1),   # wrist band: |sin| at or below which the seed's q4 / q6 is tried
+    ("seed_length", 1),  # m: distance at or below which the seed's q1 / q2 is tried
+    ("deviation", 1),    # m: how far the exact chain's poses are from the ideal model's
+    ("lever", 1),        # m: max(1, table scale)
+    ("free_wrist", 1), ("free_elbow", 1), ("free_shoulder", 1),  # free joint of each bit
+    ("geometry_at", 1), ("geometry_size", 1), ("chain_at", 1), ("limits_at", 1),
+    ("ideal_at", 1),     # the ideal model's chain (same layout as the exact chain)
+    ("path_at", 1),      # (n + 1, 6): rotation vector and translation of each constant frame
+])
+#: Per-pose facts returned beside the solutions.
+INFO = layout("Info", [
+    ("status", 1),       # 0, or a .pose STATUS_*
+    ("projection", 1),   # Frobenius norm of the change of the input's rotation block
+    ("candidates", 1),   # branches with a geometric solution
+    ("verified", 1),     # branches whose solution verified (after merging)
+    ("dropped", 1),      # branches with a candidate none of which verified
+    ("best_position", 1), ("best_rotation", 1),  # smallest errors of the dropped candidates
+])
+#: Length of the ``why`` vector of each pose (numbers an empty answer is explained with).
+WHY_SIZE = 6
+
+
+@jit
+def model_path(plan: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(ideal chain (n + 1, ROW), path (n + 1, 6)) views into a plan: the continuation from
+    the ideal model to the exact chain (:func:`.chain.refine_along`)."""
+    n = int(plan[PLAN.dof])
+    i_at, p_at = int(plan[PLAN.ideal_at]), int(plan[PLAN.path_at])
+    return (plan[i_at:i_at + (n + 1) * exact.ROW].reshape(n + 1, exact.ROW),
+            plan[p_at:p_at + 6 * (n + 1)].reshape(n + 1, 6))
+
+
+@jit
+def plan_parts(plan: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                   NDArray[np.float64]]:
+    """(geometry, chain (n + 1, ROW), limits (n, 2)) views into a plan."""
+    n = int(plan[PLAN.dof])
+    g_at, g_size = int(plan[PLAN.geometry_at]), int(plan[PLAN.geometry_size])
+    c_at, l_at = int(plan[PLAN.chain_at]), int(plan[PLAN.limits_at])
+    chain = plan[c_at:c_at + (n + 1) * exact.ROW].reshape(n + 1, exact.ROW)
+    return plan[g_at:g_at + g_size], chain, plan[l_at:l_at + 2 * n].reshape(n, 2)
+
+
+@jit
+def _family(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArray[np.float64],
+            seed: NDArray[np.float64], use_seed: int, clamp: float, q: NDArray[np.float64],
+            valid: NDArray[np.bool_], flags: NDArray[np.uint8], near: NDArray[np.uint8],
+            why: NDArray[np.float64], scratch: NDArray[np.float64]) -> None:
+    family = int(plan[PLAN.family])
+    angle, length = plan[PLAN.seed_angle], plan[PLAN.seed_length]
+    if family == SPHERICAL_WRIST:
+        solve_spherical_wrist(g, T, seed, use_seed, angle, length, clamp, q, valid, flags, near,
+                              why, scratch)
+    elif family == STANFORD:
+        solve_stanford(g, T, seed, use_seed, angle, length, clamp, q, valid, flags, near, why,
+                       scratch)
+    else:
+        solve_offset_wrist(g, T, seed, use_seed, angle, length, clamp, q, valid, flags, near,
+                           why, scratch)
+
+
+@jit
+def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np.float64],
+            values: NDArray[np.float64], fixed: NDArray[np.bool_], clamped: bool,
+            tolerance: float, state: NDArray[np.float64]) -> tuple[float, float]:
+    """Wrap a candidate's revolute values, refine it on the exact chain if the plan says so
+    (joints marked ``fixed`` keep their value; a candidate that is an exact solution of the
+    ideal model, not ``clamped``, is followed by continuation where Newton fails), and return
+    its (position, rotation) errors."""
+    n = values.shape[0]
+    for j in range(n):
+        if chain[j, exact.JOINT.revolute] != 0.0:
+            values[j] = wrap(values[j])
+    if plan[PLAN.refine] != 0.0:
+        start = values.copy()
+        position, rotation = exact.refine(chain, T, values, fixed, tolerance)
+        if not clamped and not exact.within(position, rotation, tolerance):  # follow the branch
+            ideal, path = model_path(plan)
+            for j in range(n):
+                values[j] = start[j]
+            exact.refine_along(ideal, chain, path, T, values, fixed, tolerance,
+                               np.empty_like(chain))
+        for j in range(n):
+            if chain[j, exact.JOINT.revolute] != 0.0:
+                values[j] = wrap(values[j])
+    return exact.check(chain, values, T, state)
+
+
+@jit
+def _fix_free(plan: NDArray[np.float64], bits: int, fixed: NDArray[np.bool_]) -> None:
+    """fixed[j] = True for the free joint of each singularity bit in ``bits``."""
+    for j in range(fixed.shape[0]):
+        fixed[j] = False
+    if bits & WRIST:
+        fixed[int(plan[PLAN.free_wrist])] = True
+    if bits & ELBOW:
+        fixed[int(plan[PLAN.free_elbow])] = True
+    if bits & SHOULDER:
+        fixed[int(plan[PLAN.free_shoulder])] = True
+
+
+@jit
+def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
+                   T: NDArray[np.float64], seed: NDArray[np.float64], tolerance: float,
+                   q: NDArray[np.float64], ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+                   errors: NDArray[np.float64], why: NDArray[np.float64],
+                   info: NDArray[np.float64], fwork: NDArray[np.float64],
+                   bwork: NDArray[np.bool_], uwork: NDArray[np.uint8]) -> None:
+    """Steps 1-3 for one pose: q (B, n) the branches' verified principal solutions where ok (B,),
+    their flags (B,) and errors (B, 2); why (WHY_SIZE,), info (INFO.size,). Work arrays:
+    :func:`work_sizes`."""
+    n = seed.shape[0]
+    B = BRANCHES
+    for k in range(INFO.size):
+        info[k] = 0.0
+    for k in range(why.shape[0]):
+        why[k] = math.nan
+    for b in range(B):
+        ok[b] = False
+        flags[b] = 0
+    st = status(T)
+    if st != 0:
+        info[INFO.status] = st
+        return
+    for j in range(n):
+        if not math.isfinite(seed[j]):
+            info[INFO.status] = STATUS_BAD_SEED
+            return
+    g, chain, _ = plan_parts(plan)
+    at = 0
+    projected = fwork[at:at + 12].reshape(3, 4)
+    at += 12
+    T_dh = fwork[at:at + 12].reshape(3, 4)
+    at += 12
+    state = fwork[at:at + 12]
+    at += 12
+    scratch = fwork[at:at + 16]
+    at += 16
+    seeded_q = fwork[at:at + B * n].reshape(B, n)
+    at += B * n
+    candidate = fwork[at:at + n]
+    at += n
+    seeded_why = fwork[at:at + WHY_SIZE]
+    valid, seeded_valid, fixed = bwork[:B], bwork[B:2 * B], bwork[2 * B:2 * B + n]
+    near, seeded_flags, seeded_near = uwork[:B], uwork[B:2 * B], uwork[2 * B:3 * B]
+    info[INFO.projection] = project(T, projected)
+    to_dh(frames, projected, T_dh)
+    clamp = tolerance + plan[PLAN.deviation]
+    _family(plan, g, T_dh, seed, 0, clamp, q, valid, flags, near, why, scratch)
+    wanted = 0
+    for b in range(B):
+        wanted |= near[b] & FREE
+    if wanted != 0:
+        _family(plan, g, T_dh, seed, wanted, clamp, seeded_q, seeded_valid, seeded_flags,
+                seeded_near, seeded_why, scratch)
+    best_position, best_rotation = math.inf, math.inf
+    seeded_wrist = bwork[2 * B + n:3 * B + n]
+    for b in range(B):
+        seeded_wrist[b] = False
+        tried = False
+        bits = seeded_near[b] & wanted
+        if bits != 0 and seeded_valid[b]:
+            tried = True
+            for j in range(n):
+                candidate[j] = seeded_q[b, j]
+            _fix_free(plan, bits, fixed)
+            position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+                                         (seeded_near[b] & CLAMPED) != 0, tolerance, state)
+            if exact.within(position, rotation, tolerance):
+                for j in range(n):
+                    q[b, j] = candidate[j]
+                ok[b] = True
+                flags[b] = seeded_flags[b] | bits
+                seeded_wrist[b] = (bits & WRIST) != 0
+                errors[b, 0], errors[b, 1] = position, rotation
+            else:
+                best_position = min(best_position, position)
+                best_rotation = min(best_rotation, rotation)
+        if not ok[b] and valid[b]:
+            tried = True
+            for j in range(n):
+                candidate[j] = q[b, j]
+                fixed[j] = False
+            position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+                                         (near[b] & CLAMPED) != 0, tolerance, state)
+            if exact.within(position, rotation, tolerance):
+                for j in range(n):
+                    q[b, j] = candidate[j]
+                ok[b] = True
+                errors[b, 0], errors[b, 1] = position, rotation
+            else:
+                best_position = min(best_position, position)
+                best_rotation = min(best_rotation, rotation)
+        if tried:
+            info[INFO.candidates] += 1
+            unclamped = (valid[b] and (near[b] & CLAMPED) == 0) or (
+                bits != 0 and seeded_valid[b] and (seeded_near[b] & CLAMPED) == 0)
+            if not ok[b] and unclamped:  # a solution of the ideal model that did not settle
+                info[INFO.dropped] += 1
+    # the two wrist branches of an arm branch that both took the seed's wrist: one solution
+    for b in range(0, B, 2):
+        if ok[b] and ok[b + 1] and seeded_wrist[b] and seeded_wrist[b + 1]:
+            worse = b + 1 if _size(errors, b) <= _size(errors, b + 1) else b
+            ok[worse] = False
+    if plan[PLAN.refine] != 0.0:
+        _merge_duplicates(chain, q, ok, errors)
+    for b in range(B):
+        if ok[b]:
+            info[INFO.verified] += 1
+    info[INFO.best_position], info[INFO.best_rotation] = best_position, best_rotation
+
+
+@jit
+def _size(errors: NDArray[np.float64], b: int) -> float:
+    return max(errors[b, 0], errors[b, 1])
+
+
+@jit
+def _merge_duplicates(chain: NDArray[np.float64], q: NDArray[np.float64], ok: NDArray[np.bool_],
+                      errors: NDArray[np.float64]) -> None:
+    """Branches of a refined table that converged to one solution: keep the first."""
+    B, n = q.shape
+    for a in range(B):
+        if not ok[a]:
+            continue
+        for b in range(a + 1, B):
+            if not ok[b]:
+                continue
+            same = True
+            for j in range(n):
+                difference = q[a, j] - q[b, j]
+                if chain[j, exact.JOINT.revolute] != 0.0:
+                    difference = wrap(difference)
+                same = same and abs(difference) <= 2.0 * MERGE_ANGLE
+            if same:
+                ok[b] = False
+                if _size(errors, b) < _size(errors, a):
+                    for j in range(n):
+                        q[a, j] = q[b, j]
+                    errors[a, 0], errors[a, 1] = errors[b, 0], errors[b, 1]
+
+
+@jit
+def copy_totals(plan: NDArray[np.float64], q: NDArray[np.float64], ok: NDArray[np.bool_],
+                tolerance: float, copies: bool, totals: NDArray[np.int64]) -> None:
+    """Per branch (B,): how many solutions step 4 can give (every in-limit copy, or 1 when
+    ``copies`` is False and the branch has an in-limit copy; 0 for a branch that is not ok)."""
+    _, chain, limits = plan_parts(plan)
+    slack = tolerance / plan[PLAN.lever]
+    for b in range(q.shape[0]):
+        total = 1 if ok[b] else 0
+        for j in range(q.shape[1]):
+            if total == 0:
+                break
+            _, count = turn_range(limits[j, 0], limits[j, 1],
+                                  chain[j, exact.JOINT.revolute] != 0.0, q[b, j], slack)
+            total = total * count if copies else min(total, count)
+        totals[b] = total
+
+
+@jit
+def expand(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np.float64],
+           seed: NDArray[np.float64], tolerance: float, copies: bool, q: NDArray[np.float64],
+           ok: NDArray[np.bool_], flags: NDArray[np.uint8], errors: NDArray[np.float64],
+           out_q: NDArray[np.float64], out_branch: NDArray[np.int16],
+           out_flags: NDArray[np.uint8], out_errors: NDArray[np.float64],
+           fwork: NDArray[np.float64], iwork: NDArray[np.int64]) -> int:
+    """Step 4 for one pose: the solutions in order of branch, then of copy (mixed radix over the
+    joints' copies, last joint fastest); with ``copies`` False one per branch, the copy nearest
+    the seed. Returns the count, or -1 when out_q has too few rows."""
+    _, chain, limits = plan_parts(plan)
+    n = q.shape[1]
+    slack = tolerance / plan[PLAN.lever]
+    value = fwork[:n]
+    state = fwork[n:n + 12]
+    T_dh = fwork[n + 12:n + 24].reshape(3, 4)
+    projected = fwork[n + 24:n + 36].reshape(3, 4)
+    have_target = False
+    first, counts, digits = iwork[:n], iwork[n:2 * n], iwork[2 * n:3 * n]
+    slot = 0
+    for b in range(q.shape[0]):
+        if not ok[b]:
+            continue
+        total = 1
+        for j in range(n):
+            revolute = chain[j, exact.JOINT.revolute] != 0.0
+            if copies:
+                first[j], counts[j] = turn_range(limits[j, 0], limits[j, 1], revolute, q[b, j],
+                                                 slack)
+            else:
+                turn, exists = nearest_turn(limits[j, 0], limits[j, 1], revolute, q[b, j],
+                                            slack, seed[j])
+                first[j], counts[j] = turn, 1 if exists else 0
+            total *= counts[j]
+            digits[j] = 0
+        recheck = max(errors[b, 0], errors[b, 1]) > tolerance - COPY_MARGIN
+        for _ in range(total):
+            clipped = False
+            for j in range(n):
+                revolute = chain[j, exact.JOINT.revolute] != 0.0
+                shifted = q[b, j] + (2.0 * math.pi * (first[j] + digits[j]) if revolute else 0.0)
+                value[j] = placed(limits[j, 0], limits[j, 1], revolute, q[b, j],
+                                  first[j] + digits[j])
+                clipped = clipped or value[j] != shifted
+            position, rotation = errors[b, 0], errors[b, 1]
+            keep = True
+            if clipped or recheck:
+                if not have_target:
+                    project(T, projected)
+                    to_dh(frames, projected, T_dh)
+                    have_target = True
+                position, rotation = exact.check(chain, value, T_dh, state)
+                keep = exact.within(position, rotation, tolerance)
+            if keep:
+                if slot >= out_q.shape[0]:
+                    return -1
+                for j in range(n):
+                    out_q[slot, j] = value[j]
+                out_branch[slot] = b
+                out_flags[slot] = flags[b]
+                out_errors[slot, 0], out_errors[slot, 1] = position, rotation
+                slot += 1
+            for j in range(n - 1, -1, -1):  # next mixed-radix digit, last joint fastest
+                digits[j] += 1
+                if digits[j] < counts[j]:
+                    break
+                digits[j] = 0
+    return slot
+
+
+@jit
+def work_sizes(n: int) -> tuple[int, int, int, int]:
+    """Lengths of the float, bool, uint8 and int64 work arrays of one pose."""
+    floats = 52 + BRANCHES * n + n + WHY_SIZE
+    return floats, 3 * BRANCHES + n, 3 * BRANCHES, 3 * n
+
+
+@jit
+def solve_one(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np.float64],
+              seed: NDArray[np.float64], tolerance: float, copies: bool,
+              out_q: NDArray[np.float64], out_branch: NDArray[np.int16],
+              out_flags: NDArray[np.uint8], out_errors: NDArray[np.float64],
+              why: NDArray[np.float64], info: NDArray[np.float64], fwork: NDArray[np.float64],
+              bwork: NDArray[np.bool_], uwork: NDArray[np.uint8],
+              iwork: NDArray[np.int64]) -> int:
+    """The whole pipeline for one pose: the solutions into out_* (M rows), why and info.
+    Returns the count, or -1 when out_q has too few rows (or the pose was rejected: see
+    info[INFO.status])."""
+    n = seed.shape[0]
+    B = BRANCHES
+    q = np.empty((B, n))
+    ok = np.empty(B, np.bool_)
+    flags = np.empty(B, np.uint8)
+    errors = np.empty((B, 2))
+    solve_branches(plan, frames, T, seed, tolerance, q, ok, flags, errors, why, info, fwork,
+                   bwork, uwork)
+    if info[INFO.status] != 0:
+        return 0
+    return expand(plan, frames, T, seed, tolerance, copies, q, ok, flags, errors, out_q,
+                  out_branch, out_flags, out_errors, fwork, iwork)
+
+
+@jit
+def solve_batch(plan: NDArray[np.float64], frames: NDArray[np.float64],
+                targets: NDArray[np.float64], seeds: NDArray[np.float64], tolerance: float,
+                copies: bool, q: NDArray[np.float64], ok: NDArray[np.bool_],
+                flags: NDArray[np.uint8], errors: NDArray[np.float64],
+                totals: NDArray[np.int64], why: NDArray[np.float64],
+                info: NDArray[np.float64]) -> None:
+    """Steps 1-3 for N poses (targets (N, 4, 4), seeds (N, n) or (1, n)): q (N, B, n), ok,
+    flags, totals (N, B), errors (N, B, 2), why (N, WHY_SIZE), info (N, INFO.size)."""
+    n = seeds.shape[1]
+    f_size, b_size, u_size, _ = work_sizes(n)
+    fwork = np.empty(f_size)
+    bwork = np.empty(b_size, np.bool_)
+    uwork = np.empty(u_size, np.uint8)
+    for i in range(targets.shape[0]):
+        seed = seeds[i] if seeds.shape[0] > 1 else seeds[0]
+        solve_branches(plan, frames, targets[i], seed, tolerance, q[i], ok[i], flags[i],
+                       errors[i], why[i], info[i], fwork, bwork, uwork)
+        copy_totals(plan, q[i], ok[i], tolerance, copies, totals[i])
+
+
+@jit
+def expand_batch(plan: NDArray[np.float64], frames: NDArray[np.float64],
+                 targets: NDArray[np.float64], seeds: NDArray[np.float64], tolerance: float,
+                 copies: bool, q: NDArray[np.float64], ok: NDArray[np.bool_],
+                 flags: NDArray[np.uint8], errors: NDArray[np.float64],
+                 out_q: NDArray[np.float64], out_valid: NDArray[np.bool_],
+                 out_branch: NDArray[np.int16], out_flags: NDArray[np.uint8],
+                 out_errors: NDArray[np.float64]) -> None:
+    """Step 4 for N poses into out_q (N, M, n), out_valid, out_branch, out_flags (N, M) and
+    out_errors (N, M, 2); M >= every pose's total (:func:`copy_totals`)."""
+    n = seeds.shape[1]
+    f_size, _, _, i_size = work_sizes(n)
+    fwork = np.empty(f_size)
+    iwork = np.empty(i_size, np.int64)
+    for i in range(targets.shape[0]):
+        seed = seeds[i] if seeds.shape[0] > 1 else seeds[0]
+        count = expand(plan, frames, targets[i], seed, tolerance, copies, q[i], ok[i], flags[i],
+                       errors[i], out_q[i], out_branch[i], out_flags[i], out_errors[i], fwork,
+                       iwork)
+        for k in range(out_valid.shape[1]):
+            out_valid[i, k] = k < count
+            if k >= count:
+                out_branch[i, k] = -1
+                out_flags[i, k] = 0
+                for j in range(n):
+                    out_q[i, k, j] = 0.0

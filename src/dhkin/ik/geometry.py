@@ -1,0 +1,184 @@
+"""Geometry of a table at q = 0, and structural conditions measured as numbers.
+
+Joint axes are taken from the table's exact chain (corrections included) at q = 0, in DH frame 0:
+joint i turns about z_{i-1} (standard DH) or z_i (modified DH), right-handed about
+``direction_i * z``. A family's structure (axes parallel, perpendicular, meeting in a point) is a
+list of :class:`Condition` values; the same list decides an exact fit (tight tolerances) and a
+fit within the band of the family (:mod:`dhkin.ik.family`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dhkin.dh import DHTable
+
+Vector = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class JointAxis:
+    """A joint axis at q = 0 in DH frame 0: a point on it and its unit DH z direction (positive
+    ``direction * q`` turns right-handed about it)."""
+
+    point: Vector
+    direction: Vector
+
+
+def zero_configuration(table: DHTable) -> tuple[list[JointAxis], NDArray[np.float64]]:
+    """Joint axes of ``table`` at q = 0 and M = DH frame 0 -> DH frame n at q = 0."""
+    links = table.link_transforms(np.zeros((1, table.dof)))[0]
+    frames = [np.eye(4)]
+    for link in links:
+        frames.append(frames[-1] @ link)
+    first = 0 if table.convention == "standard" else 1
+    axes = [JointAxis(point=frames[i + first][:3, 3].copy(),
+                      direction=frames[i + first][:3, 2].copy()) for i in range(table.dof)]
+    return axes, frames[-1]
+
+
+def table_scale(table: DHTable) -> float:
+    """Length scale of a table (m): the sum of its |a| and |d| values and prismatic strokes."""
+    total = 0.0
+    for joint in table.joints:
+        total += abs(joint.a) + abs(joint.d)
+        if not joint.is_revolute:
+            total += max(abs(joint.lower), abs(joint.upper)) + abs(joint.offset)
+    return max(total, 1e-3)
+
+
+def line_distance(first: JointAxis, second: JointAxis) -> float:
+    """Shortest distance between two lines (m)."""
+    normal = np.cross(first.direction, second.direction)
+    offset = second.point - first.point
+    norm = float(np.linalg.norm(normal))
+    if norm < 1e-12:  # parallel: distance of a point from the other line
+        return float(np.linalg.norm(offset - np.dot(offset, first.direction) * first.direction))
+    return abs(float(np.dot(offset, normal))) / norm
+
+
+def separation(first: JointAxis, second: JointAxis) -> float:
+    """How far apart two (nearly) parallel axes are where the arm is: the distance of the second
+    axis's point from the first line (m). :func:`line_distance` would give the common normal's
+    length, which for lines a few microradians from parallel can meet far away."""
+    return point_line_distance(second.point, first)
+
+
+def point_line_distance(point: Vector, axis: JointAxis) -> float:
+    """Distance of ``point`` from the line ``axis`` (m)."""
+    offset = point - axis.point
+    return float(np.linalg.norm(offset - np.dot(offset, axis.direction) * axis.direction))
+
+
+def common_point(axes: Sequence[JointAxis]) -> Vector:
+    """Least-squares point nearest to all lines."""
+    normal_matrix = np.zeros((3, 3))
+    rhs = np.zeros(3)
+    for axis in axes:
+        projector = np.eye(3) - np.outer(axis.direction, axis.direction)
+        normal_matrix += projector
+        rhs += projector @ axis.point
+    return np.linalg.lstsq(normal_matrix, rhs, rcond=None)[0]
+
+
+def closest_point(first: JointAxis, second: JointAxis) -> Vector:
+    """Midpoint of the common perpendicular of two non-parallel lines."""
+    w1, w2 = first.direction, second.direction
+    offset = second.point - first.point
+    b = float(np.dot(w1, w2))
+    denominator = 1.0 - b * b
+    s = (np.dot(offset, w1) - b * np.dot(offset, w2)) / denominator
+    t = (b * np.dot(offset, w1) - np.dot(offset, w2)) / denominator
+    return 0.5 * ((first.point + s * w1) + (second.point + t * w2))
+
+
+def abs_cos(first: Vector, second: Vector) -> float:
+    return abs(float(np.dot(first, second)))
+
+
+def abs_sin(first: Vector, second: Vector) -> float:
+    return float(np.linalg.norm(np.cross(first, second)))
+
+
+Kind = Literal["angle", "length"]
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One structural condition of a family, measured on a table.
+
+    ``value`` is |cos| or |sin| of an angle between axes (``kind`` "angle") or a distance in
+    metres ("length"). ``ideal`` "zero": the family needs it to be 0 (perpendicular, parallel,
+    meeting); "positive": it must not vanish (distinct axes, a real upper arm).
+    """
+
+    what: str
+    value: float
+    kind: Kind
+    ideal: Literal["zero", "positive"]
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """Largest |cos| / |sin| (``angle``) and distance in metres (``length``) that count as 0."""
+
+    angle: float
+    length: float
+
+    def of(self, kind: Kind) -> float:
+        return self.angle if kind == "angle" else self.length
+
+
+def problems(conditions: Sequence[Condition], tolerance: Tolerance) -> list[str]:
+    """The conditions that fail at ``tolerance``, in words with the measured values."""
+    out = []
+    for c in conditions:
+        limit = tolerance.of(c.kind)
+        unit = " m" if c.kind == "length" else ""
+        if c.ideal == "zero" and not c.value <= limit:
+            out.append(f"{c.what}: {c.value:.3g}{unit}, expected <= {limit:.3g}{unit}")
+        elif c.ideal == "positive" and not c.value > limit:
+            out.append(f"{c.what}: {c.value:.3g}{unit}, expected > {limit:.3g}{unit}")
+    return out
+
+
+def deviation(conditions: Sequence[Condition]) -> tuple[float, float]:
+    """Largest value of the "zero" conditions: (angle, length)."""
+    angle = max([c.value for c in conditions if c.ideal == "zero" and c.kind == "angle"],
+                default=0.0)
+    length = max([c.value for c in conditions if c.ideal == "zero" and c.kind == "length"],
+                 default=0.0)
+    return angle, length
+
+
+def type_conditions(table: DHTable, expected: str) -> list[str]:
+    """Joint count and types, ``expected`` like "RRPRRR" (R revolute, P prismatic): the
+    mismatches in words (these are not measured: a table has the types or not)."""
+    if table.dof != len(expected):
+        return [f"expected {len(expected)} joints, got {table.dof}"]
+    out = []
+    for index, (joint, kind) in enumerate(zip(table.joints, expected, strict=True)):
+        wanted = "revolute" if kind == "R" else "prismatic"
+        if joint.type != wanted:
+            out.append(f"joint {index + 1} ({joint.name}) is {joint.type}, expected {wanted}")
+    return out
+
+
+def spherical_wrist_conditions(axes: Sequence[JointAxis]) -> list[Condition]:
+    """Axes 4, 5, 6 (0-based 3, 4, 5) meet in one point, 4 perpendicular to 5, 5 to 6."""
+    axis4, axis5, axis6 = axes[3], axes[4], axes[5]
+    centre = common_point([axis4, axis5, axis6])
+    spread = max(point_line_distance(centre, a) for a in (axis4, axis5, axis6))
+    return [
+        Condition("axes 4, 5, 6 meet in one point (largest distance of the nearest point)",
+                  spread, "length", "zero"),
+        Condition("axes 4 and 5 perpendicular (|cos|)", abs_cos(axis4.direction, axis5.direction),
+                  "angle", "zero"),
+        Condition("axes 5 and 6 perpendicular (|cos|)", abs_cos(axis5.direction, axis6.direction),
+                  "angle", "zero"),
+    ]

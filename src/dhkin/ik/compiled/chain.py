@@ -44,8 +44,8 @@ MAX_JOINT_STEP = 0.3
 #: iterates from a start millimetres away may first grow before they converge quadratically,
 #: and a strictly decreasing rule then stalls. Larger growth is rejected and damped.
 GROWTH = 10.0
-#: Damping after a rejected step: this fraction of the largest diagonal entry of J^T J first,
-#: growing tenfold per rejection (Levenberg-Marquardt); a taken step divides it by ten.
+#: Damping after a rejected step: this fraction of the diagonal of J^T J first, growing a
+#: hundredfold per rejection (Levenberg-Marquardt); a taken step divides it by ten.
 DAMPING_START = 1e-9
 #: Largest damping before giving up (the step is then shorter than rounding).
 DAMPING_LIMIT = 1e12
@@ -228,16 +228,18 @@ def _cholesky_solve(A: NDArray[np.float64], b: NDArray[np.float64],
 
 @jit
 def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
-           fixed: NDArray[np.bool_], tolerance: float) -> tuple[float, float]:
+           fixed: NDArray[np.bool_], tolerance: float,
+           budget: int = 4 * MAX_STEPS) -> tuple[float, float]:
     """Newton's method on the exact chain from q (n,), in place, towards the target T (3, 4),
     DH frame 0 -> n; joints marked ``fixed`` keep their value (the seed's choice of a free joint
     at a singularity). q ends as the best iterate; returns its (position, rotation) errors.
 
     Each step solves (J^T J + lambda D) dq = J^T e over the free joints (D: the diagonal of
     J^T J; lambda = 0 is Gauss-Newton), shortened to MAX_JOINT_STEP per joint. A step is taken
-    unless it makes |e| more than GROWTH times larger; then lambda grows (DAMPING_START, x10)
+    unless it makes |e| more than GROWTH times larger; then lambda grows (DAMPING_START, x100)
     and the step is solved again. Stops when both errors are below REFINE_FRACTION *
-    tolerance, after MAX_STEPS, or when lambda passes DAMPING_LIMIT.
+    tolerance, after MAX_STEPS, after ``budget`` evaluations of the chain, or when lambda passes
+    DAMPING_LIMIT.
     """
     n = chain.shape[0] - 1
     frames = np.empty((n + 1, 12))
@@ -257,8 +259,9 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
     size = position * position + rotation * rotation
     best_position, best_rotation, best_size = position, rotation, size
     damping = 0.0
+    evaluations = 1
     for _ in range(MAX_STEPS):
-        if position <= goal and rotation <= goal:
+        if (position <= goal and rotation <= goal) or evaluations >= budget:
             break
         _jacobian(chain, frames, J)
         for a in range(n):
@@ -290,12 +293,13 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
                 for a in range(n):
                     trial[a] = q[a] + shrink * step[a]
                 fk_frames(chain, trial, trial_frames)
+                evaluations += 1
                 trial_position, trial_rotation = _error_vector(trial_frames[n], T, trial_e)
                 trial_size = trial_position * trial_position + trial_rotation * trial_rotation
                 taken = trial_size <= GROWTH * GROWTH * size
             if not taken:
-                damping = max(10.0 * damping, DAMPING_START)
-                if damping > DAMPING_LIMIT:
+                damping = max(100.0 * damping, DAMPING_START)
+                if damping > DAMPING_LIMIT or evaluations >= budget:
                     break
         if not taken:
             break

@@ -401,10 +401,17 @@ def _member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: float, s1: 
     return q2, q3, q4, t, ok and math.isfinite(distance), distance
 
 
-#: Central-difference step (rad) of the nearest-member search over q6.
-MEMBER_STEP = 1e-4
-#: Newton steps of that search (each at most halved until the distance decreases).
-MEMBER_ITERATIONS = 8
+#: Nearest-member search over q6: a grid of this half-width and step (rad) around the seed's
+#: q6 (where q6 would leave axis 4 out of reach it is moved onto the reach boundary, so far
+#: members are found at the grid's edge), then golden-section search to MEMBER_PRECISION within
+#: a step of the best grid point. The distance is not smooth (square roots near a stretched or
+#: folded elbow, the move onto the boundary): no derivatives are used.
+MEMBER_HALF_WIDTH = 0.5
+MEMBER_STEP = 0.05
+MEMBER_PRECISION = 1e-9
+_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+#: Grid points on each side of the seed's q6.
+MEMBER_GRID = round(MEMBER_HALF_WIDTH / MEMBER_STEP)
 
 
 @jit
@@ -413,36 +420,44 @@ def _nearest_member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: flo
                     use_seed: int, seed_length: float, clamp: float, e: int,
                     out: NDArray[np.float64]) -> bool:
     """At the wrist singularity the pose leaves a one-parameter family (q6 free, q2, q3, q4
-    following it): the member nearest the seed in joint space, by Newton's method on the
-    squared distance over q6 from the seed's q6 (central differences, halving steps). Writes
-    q2, q3, q4, q6 into out[0:4]; False when no member of this elbow branch exists there."""
-    t = seed[5]
-    q2, q3, q4, t, ok, best = _member(g, T_home, c1, s1, q5, t, reach_side, seed, use_seed,
-                                      seed_length, clamp, e)
-    if not ok:
+    following it): the member nearest the seed in joint space (squared distance over joints
+    2-4 and 6), searched over q6 (see MEMBER_*). Writes q2, q3, q4, q6 into out[0:4]; False
+    when no member of this elbow branch exists near the seed."""
+    best_t, best = seed[5], math.inf
+    steps = MEMBER_GRID
+    for k in range(-steps, steps + 1):
+        t = seed[5] + k * MEMBER_STEP
+        _, _, _, _, ok, distance = _member(g, T_home, c1, s1, q5, t, reach_side, seed,
+                                           use_seed, seed_length, clamp, e)
+        if ok and distance < best:
+            best_t, best = t, distance
+    if best == math.inf:
         return False
-    h = MEMBER_STEP
-    for _ in range(MEMBER_ITERATIONS):
-        _, _, _, _, ok_plus, plus = _member(g, T_home, c1, s1, q5, t + h, reach_side, seed,
-                                            use_seed, seed_length, clamp, e)
-        _, _, _, _, ok_minus, minus = _member(g, T_home, c1, s1, q5, t - h, reach_side, seed,
+    low, high = best_t - MEMBER_STEP, best_t + MEMBER_STEP
+    a = high - _GOLDEN * (high - low)
+    b = low + _GOLDEN * (high - low)
+    fa = _member(g, T_home, c1, s1, q5, a, reach_side, seed, use_seed, seed_length, clamp, e)
+    fb = _member(g, T_home, c1, s1, q5, b, reach_side, seed, use_seed, seed_length, clamp, e)
+    value_a = fa[5] if fa[4] else math.inf
+    value_b = fb[5] if fb[4] else math.inf
+    while high - low > MEMBER_PRECISION:
+        if value_a <= value_b:
+            high, b, value_b = b, a, value_a
+            a = high - _GOLDEN * (high - low)
+            fa = _member(g, T_home, c1, s1, q5, a, reach_side, seed, use_seed, seed_length,
+                         clamp, e)
+            value_a = fa[5] if fa[4] else math.inf
+        else:
+            low, a, value_a = a, b, value_b
+            b = low + _GOLDEN * (high - low)
+            fb = _member(g, T_home, c1, s1, q5, b, reach_side, seed, use_seed, seed_length,
+                         clamp, e)
+            value_b = fb[5] if fb[4] else math.inf
+    t = 0.5 * (low + high)
+    q2, q3, q4, t, ok, distance = _member(g, T_home, c1, s1, q5, t, reach_side, seed, use_seed,
+                                          seed_length, clamp, e)
+    if not ok or distance > best:  # the grid point is better (a kink inside the bracket)
+        q2, q3, q4, t, ok, distance = _member(g, T_home, c1, s1, q5, best_t, reach_side, seed,
                                               use_seed, seed_length, clamp, e)
-        if not (ok_plus and ok_minus):
-            break
-        slope = (plus - minus) / (2.0 * h)
-        curvature = (plus - 2.0 * best + minus) / (h * h)
-        step = -slope / curvature if curvature > 0.0 else -0.1 * slope
-        step = min(max(step, -0.5), 0.5)
-        moved = False
-        while abs(step) > 1e-12:
-            a2, a3, a4, at, ok_new, distance = _member(g, T_home, c1, s1, q5, t + step,
-                                                        reach_side, seed, use_seed, seed_length,
-                                                        clamp, e)
-            if ok_new and distance < best:
-                q2, q3, q4, t, best, moved = a2, a3, a4, at, distance, True
-                break
-            step *= 0.5
-        if not moved or abs(step) < 1e-10:
-            break
     out[0], out[1], out[2], out[3] = q2, q3, q4, t
     return True

@@ -55,6 +55,16 @@ BRANCHES = 8
 #: bound) are verified themselves.
 COPY_MARGIN = 1e-11
 
+#: Chain evaluations allowed to the refinement of a *long shot*: on a refined table, a branch
+#: that the ideal model cannot reach even within the clamp band is still tried from its clamped
+#: candidate (near a wrist singularity the exact chain can reach where the ideal model is
+#: centimetres out), with this bounded effort (a converging refinement takes 4-10).
+LONG_SHOT_BUDGET = 24
+
+#: Chain evaluations allowed to polish a candidate of an exact table that failed verification
+#: (a pose a hair outside the reach, or rounding at a singularity): Newton from it, verified.
+POLISH_BUDGET = 12
+
 #: The constants of one robot's solver (see :func:`dhkin.ik.solver.plan_array`).
 PLAN = layout("Plan", [
     ("family", 1), ("dof", 1), ("refine", 1),
@@ -122,18 +132,28 @@ def _family(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArray[np.flo
 @jit
 def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np.float64],
             values: NDArray[np.float64], fixed: NDArray[np.bool_], clamped: bool,
-            tolerance: float, state: NDArray[np.float64]) -> tuple[float, float]:
+            long_shot: bool, tolerance: float,
+            state: NDArray[np.float64]) -> tuple[float, float]:
     """Wrap a candidate's revolute values, refine it on the exact chain if the plan says so
     (joints marked ``fixed`` keep their value; a candidate that is an exact solution of the
-    ideal model, not ``clamped``, is followed by continuation where Newton fails), and return
-    its (position, rotation) errors."""
+    ideal model, not ``clamped``, is followed by continuation where Newton fails), or polish it
+    by Newton where an exact table's candidate does not verify; return its (position, rotation)
+    errors."""
     n = values.shape[0]
     for j in range(n):
         if chain[j, exact.JOINT.revolute] != 0.0:
             values[j] = wrap(values[j])
     if plan[PLAN.refine] != 0.0:
         start = values.copy()
-        position, rotation = exact.refine(chain, T, values, fixed, tolerance)
+        budget = LONG_SHOT_BUDGET if long_shot else 4 * exact.MAX_STEPS
+        position, rotation = exact.refine(chain, T, values, fixed, tolerance, budget)
+        if _any(fixed) and not exact.within(position, rotation, tolerance):
+            # the exact chain is not singular here (its singular set is shifted, or a
+            # calibration leaves none): the seed's choice of the free joint is not exact, so
+            # release it from where it got to
+            for j in range(n):
+                fixed[j] = False
+            position, rotation = exact.refine(chain, T, values, fixed, tolerance, budget)
         if not clamped and not exact.within(position, rotation, tolerance):  # follow the branch
             ideal, path = model_path(plan)
             for j in range(n):
@@ -143,7 +163,29 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
         for j in range(n):
             if chain[j, exact.JOINT.revolute] != 0.0:
                 values[j] = wrap(values[j])
-    return exact.check(chain, values, T, state)
+        return exact.check(chain, values, T, state)
+    position, rotation = exact.check(chain, values, T, state)
+    if not exact.within(position, rotation, tolerance):
+        # a clamped or near-singular candidate of an exact table: the closed form's point is
+        # not the best one the chain reaches; Newton's is, and verification decides
+        for j in range(n):
+            fixed[j] = False
+        exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET)
+        for j in range(n):
+            if chain[j, exact.JOINT.revolute] != 0.0:
+                values[j] = wrap(values[j])
+        position, rotation = exact.check(chain, values, T, state)
+    return position, rotation
+
+
+@jit
+def _finite(values: NDArray[np.float64]) -> bool:
+    return np.all(np.isfinite(values))
+
+
+@jit
+def _any(flags: NDArray[np.bool_]) -> bool:
+    return np.any(flags)
 
 
 @jit
@@ -225,7 +267,8 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
                 candidate[j] = seeded_q[b, j]
             _fix_free(plan, bits, fixed)
             position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
-                                         (seeded_near[b] & CLAMPED) != 0, tolerance, state)
+                                         (seeded_near[b] & CLAMPED) != 0, False, tolerance,
+                                         state)
             if exact.within(position, rotation, tolerance):
                 for j in range(n):
                     q[b, j] = candidate[j]
@@ -236,14 +279,17 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             else:
                 best_position = min(best_position, position)
                 best_rotation = min(best_rotation, rotation)
-        if not ok[b] and valid[b]:
-            tried = True
+        long_shot = (not valid[b] and plan[PLAN.refine] != 0.0 and _finite(q[b])
+                     and (near[b] & CLAMPED) != 0)
+        if not ok[b] and (valid[b] or long_shot):
+            tried = tried or valid[b]
             for j in range(n):
                 candidate[j] = q[b, j]
                 fixed[j] = False
             position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
-                                         (near[b] & CLAMPED) != 0, tolerance, state)
+                                         (near[b] & CLAMPED) != 0, long_shot, tolerance, state)
             if exact.within(position, rotation, tolerance):
+                tried = True
                 for j in range(n):
                     q[b, j] = candidate[j]
                 ok[b] = True

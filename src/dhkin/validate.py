@@ -37,8 +37,9 @@ Outcome per sample (one each, the first that applies, in this order):
   takes ``q_seed`` gets the sampled q and must return it, while for an IK without ``q_seed`` only
   the joints every such family keeps (joints 1 and 5) are compared. Near a singularity a pose
   fixes q only to about (pose uncertainty) / sigma_min(J), so the joint tolerance there is
-  ``joint_tolerance + max(POSE_ROUNDING, reference deviation) / sigma_min`` (sigma_min from
-  Pinocchio's Jacobian at the sampled q);
+  ``joint_tolerance + max(POSE_ROUNDING, reference deviation, residual) / sigma_min``
+  (sigma_min from Pinocchio's Jacobian at the sampled q; residual: the returned solutions'
+  largest error on the reference);
 * ``missing_branch``: a branch of the closed-form solution set is not among the solutions, on
   any pose, whether or not the sampled q lies on it. The branches of a pose are dhkin's own
   closed-form answer ``robot.ik(T, q_seed=q, copies=False)`` (one solution per branch; those
@@ -635,11 +636,13 @@ def _resolvable(robot: Robot, q: NDArray[np.float64], joint_tolerance: float,
 
 
 def _matched(robot: Robot, model: TargetModel, Q: NDArray[np.float64], q: NDArray[np.float64],
-             joints: NDArray[np.int64], joint_tolerance: float) -> tuple[bool, float]:
+             joints: NDArray[np.int64], joint_tolerance: float,
+             residual: float = 0.0) -> tuple[bool, float]:
     """Whether some row of Q is q (mod 2pi on ``joints``, widened by :func:`_resolvable` with
-    the reference's deviation)."""
+    the pose's uncertainty: the reference's deviation, or the residual of the solutions (two
+    joint vectors within r of one pose can differ by ~r / sigma_min))."""
     closest = float(np.abs(_wrap(robot, Q - q)[:, joints]).max(axis=1).min())
-    noise = max(POSE_ROUNDING, model.deviation)
+    noise = max(POSE_ROUNDING, model.deviation, residual)
     found = closest <= joint_tolerance or closest <= _resolvable(robot, q, joint_tolerance, noise)
     return found, closest
 
@@ -678,8 +681,10 @@ def _check_sample(robot: Robot, model: TargetModel, q_sampled: NDArray[np.float6
     if not returned:
         return _Checked("no_solution", "nothing returned for a reachable target", position,
                         rotation), Q
+    residual = float(max(position.max(), rotation.max())) if len(Q) else 0.0
     found, closest = _matched(robot, model, Q, q_sampled,
-                              _compared_joints(robot, q_sampled, seeded), joint_tolerance)
+                              _compared_joints(robot, q_sampled, seeded), joint_tolerance,
+                              residual)
     if not found:
         return _Checked("missing", f"closest returned solution differs by {closest:.2e} "
                                    "(mod 2pi)", position, rotation), Q

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import IKInputError
-from dhkin.ik.family import FamilyFit
+from dhkin.ik.family import BAND, FamilyFit
 from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions, flag_names
 from dhkin.transforms import invert, rot_x, rot_z, translation
 
@@ -99,8 +99,10 @@ def plan_array(table: DHTable, fit: FamilyFit) -> NDArray[np.float64]:
     head[PLAN.family] = fit.solved.kernel
     head[PLAN.dof] = table.dof
     head[PLAN.refine] = 1.0 if fit.refine else 0.0
-    head[PLAN.seed_angle] = FLAG_BAND + 2.0 * (rotation + position / lever)
-    head[PLAN.seed_length] = FLAG_BAND * scale + 2.0 * deviation
+    # A refined table's exact singular set lies anywhere within the family band of the ideal
+    # model's (the band bounds the structural deviation): the seed band covers it
+    head[PLAN.seed_angle] = FLAG_BAND + (BAND.angle if fit.refine else 0.0)
+    head[PLAN.seed_length] = FLAG_BAND * scale + (BAND.length if fit.refine else 0.0)
     head[PLAN.deviation] = 2.0 * deviation
     head[PLAN.lever] = lever
     head[PLAN.free_wrist], head[PLAN.free_elbow], head[PLAN.free_shoulder] = \

@@ -70,6 +70,7 @@ PLAN = layout("Plan", [
     ("family", 1), ("dof", 1), ("refine", 1),
     ("seed_angle", 1),   # wrist band: |sin| at or below which the seed's q4 / q6 is tried
     ("seed_length", 1),  # m: distance at or below which the seed's q1 / q2 is tried
+                         # (the flag band; on refined tables widened by the family band)
     ("deviation", 1),    # m: how far the exact chain's poses are from the ideal model's
     ("lever", 1),        # m: max(1, table scale)
     ("free_wrist", 1), ("free_elbow", 1), ("free_shoulder", 1),  # free joint of each bit
@@ -304,8 +305,10 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             if not ok[b] and unclamped:  # a solution of the ideal model that did not settle
                 info[INFO.dropped] += 1
     # the two wrist branches of an arm branch that both took the seed's wrist: one solution
+    # (on a refined table the seeded candidates were refined; duplicates merge below)
     for b in range(0, B, 2):
-        if ok[b] and ok[b + 1] and seeded_wrist[b] and seeded_wrist[b + 1]:
+        if (plan[PLAN.refine] == 0.0 and ok[b] and ok[b + 1] and seeded_wrist[b]
+                and seeded_wrist[b + 1]):
             worse = b + 1 if _size(errors, b) <= _size(errors, b + 1) else b
             ok[worse] = False
     if plan[PLAN.refine] != 0.0:

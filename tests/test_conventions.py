@@ -77,15 +77,22 @@ def _row(table: DHTable, i: int, a: float, alpha: float) -> dict[str, Any]:
 
 
 def standard_to_modified(table: DHTable) -> DHTable:
-    """The modified-DH table of the same arm as a standard one."""
+    """The modified-DH table of the same arm as a standard one. A standard row i ends with
+    X_i C_i (X_i = Tx(a_i) Rx(alpha_i), C_i its correction); the modified rows put X_i at the
+    start of row i + 1, so row i's correction becomes X_i C_i X_i^-1 (and tool0 follows X_n)."""
     assert table.convention == "standard"
     n = table.dof
     shift = [(0.0, 0.0)] + [(table.joints[i - 1].a, table.joints[i - 1].alpha) for i in range(1, n)]
     tail = _tx(table.joints[-1].a) @ _rx(table.joints[-1].alpha)
+    rows = [_row(table, i, a, alpha) for i, (a, alpha) in enumerate(shift)]
+    for joint, row in zip(table.joints, rows, strict=True):
+        if joint.has_correction:
+            X = _tx(joint.a) @ _rx(joint.alpha)
+            row["correction"] = _frame(X @ joint.correction_matrix @ np.linalg.inv(X))
     data = {"name": f"{table.name}_as_modified", "convention": "modified",
             "units": {"length": "m", "angle": "rad"}, "base": _frame(table.base),
             "tool": _frame(tail @ table.tool), "flange": _frame(tail @ table.flange),
-            "joints": [_row(table, i, a, alpha) for i, (a, alpha) in enumerate(shift)]}
+            "joints": rows}
     return dhkin.parse_table(data, source="standard_to_modified")
 
 

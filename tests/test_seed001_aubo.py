@@ -3,11 +3,12 @@
 
 The blog reads [-23.140575, -14.042009, 109.599879, 38.842449, 9.966328, 53.998950] deg off the
 teach pendant and checks its algebraic IK against it. Findings pinned here: the vector lies inside
-the blog's +-175 deg filter; its pose has 8 distinct solutions (512 with the 2*pi copies the
-+-360 deg limits allow); the filter removes exactly one of the 8 (its q4 is -177.42 deg); the
-blog's algorithm, with the vendor's d1 = 0.1632 m (the blog rounds it to 0.163), finds the same 8
-solutions, and divides by sin(q5), which at the wrist singularity silently returns wrong
-joint values (off by d5 = 0.1025 m) where ours returns the exact, flagged, seeded solution.
+the blog's +-175 deg filter; its pose has 8 distinct solutions (``robot.ik`` gives one per branch;
+512 with every 2*pi copy the +-360 deg limits allow, ``copies=True``); the filter removes exactly
+one of the 8 (its q4 is -177.42 deg); the blog's algorithm, with the vendor's d1 = 0.1632 m (the
+blog rounds it to 0.163), finds the same 8 solutions, and divides by sin(q5), which at the wrist
+singularity silently returns wrong joint values (off by d5 = 0.1025 m) where ours returns the
+exact, flagged solution nearest the seed (seeded with the vector, the vector itself).
 """
 
 from __future__ import annotations
@@ -94,9 +95,14 @@ def test_pendant_vector_is_recovered_among_the_solutions_of_its_pose(load_robot)
     ref = robot.reference()
     T = ref.fk(PENDANT)
     sols = robot.ik(T)
-    assert len(sols) == 8 * 2**6  # 8 branches, each joint +-360 deg: 2 copies per joint
-    principal = distinct_principal(sols.q)
+    assert len(sols) == 8  # one per branch: its copy nearest 0, here the principal value
+    assert np.all(np.abs(sols.q) <= np.pi)
+    assert sols.dropped == 0 and sols.projection <= 1e-15
+    every = robot.ik(T, copies=True)
+    assert len(every) == 8 * 2**6  # 8 branches, each joint +-360 deg: 2 copies per joint
+    principal = distinct_principal(every.q)
     assert principal.shape == (8, 6)
+    np.testing.assert_allclose(distinct_principal(sols.q), principal, atol=1e-12)
     position, rotation = pose_error(ref.fk(principal), np.broadcast_to(T, (8, 4, 4)))
     assert max(position.max(), rotation.max()) <= 1e-10
     k = int(np.argmin(np.abs(sols.q - PENDANT).max(1)))
@@ -104,7 +110,9 @@ def test_pendant_vector_is_recovered_among_the_solutions_of_its_pose(load_robot)
     assert sols.flags[k] == frozenset()
     assert dict(sols.configurations[k].labels) == {"shoulder": "right", "elbow": "up",
                                                     "wrist": "up"}
+    assert sols.configurations[k].turns == (0,) * 6
     assert np.array_equal(sols.nearest(PENDANT), sols.q[k])
+    assert np.array_equal(every.nearest(PENDANT), sols.q[k])
 
 
 def test_the_175_deg_filter_removes_exactly_the_solutions_outside_it(load_robot):
@@ -150,12 +158,22 @@ def test_blog_solver_fails_at_the_wrist_singularity_where_ours_is_exact(load_rob
     # wrong joint values: the four rows of the singular shoulder branch miss by d5 = 0.1025 m.
     assert blog_ok.sum() == 4
     assert position[~blog_ok].min() >= 0.1
+    print(f"\nblog at q5 = 0: 4 of 8 rows exact, the singular shoulder's 4 miss by "
+          f"{position[~blog_ok].min():.4f} .. {position[~blog_ok].max():.4f} m")
     sols = robot.ik(T, q_seed=q)
-    k = int(np.argmin(np.abs(sols.q - q).max(1)))
-    assert np.abs(sols.q[k] - q).max() <= 1e-9
-    assert "wrist" in sols.flags[k]
     position, rotation = pose_error(ref.fk(sols.q), np.broadcast_to(T, (len(sols), 4, 4)))
     assert max(position.max(), rotation.max()) <= 1e-9
+    # the singular shoulder branch is one family per elbow branch (its two wrist branches are
+    # one): 2 solutions, flagged, one of them the seed itself; the other shoulder's 4 are the
+    # blog's 4 exact rows
+    singular = np.array(["wrist" in f for f in sols.flags])
+    assert len(sols) == 6 and singular.sum() == 2
+    assert {sols.configurations[k].labels["elbow"] for k in np.flatnonzero(singular)} == {
+        "up", "down"}
+    k = int(np.argmin(np.abs(sols.q - q).max(1)))
+    assert singular[k] and np.abs(sols.q[k] - q).max() <= 1e-9
+    np.testing.assert_allclose(distinct_principal(sols.q[~singular]),
+                               distinct_principal(blog[blog_ok]), atol=1e-9)
 
 
 def test_pendant_pose_on_the_vendor_urdf(load_robot):

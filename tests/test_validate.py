@@ -68,7 +68,8 @@ class Oracle:
     """A correct, complete, seed-continuous IK for the validator's tests, independent of dhkin's
     IK being right: it learns the sampled q from the first call for a target (the validator
     passes it as q_seed) and returns it with its in-limit 2pi copies, plus the closed-form
-    branches ``robot.ik(T, q_seed=q, copies=False)`` that verify on the reference."""
+    branches ``robot.ik(T, q_seed=q, copies=False)`` that verify on the table's own model (the
+    validator allows them the reference's deviation from it)."""
 
     def __init__(self, robot: dhkin.Robot, reference: object = None, base: str | None = None,
                  tip: str | None = None, tolerance: float = 1e-9) -> None:
@@ -84,7 +85,7 @@ class Oracle:
         q = self.known.setdefault(T.tobytes(), np.array(q_seed, dtype=float))
         branches = self.robot.ik(T, q_seed=q, copies=False).q
         if len(branches):
-            position, rotation = pose_error(self.model.fk(branches),
+            position, rotation = pose_error(self.robot.reference().fk(branches),
                                             np.broadcast_to(T, (len(branches), 4, 4)))
             branches = branches[(position <= self.tolerance) & (rotation <= self.tolerance)]
         return np.vstack([in_limit_copies(self.robot, q), branches])
@@ -216,27 +217,27 @@ def test_a_correct_ik_passes_every_check(name: str, reference: str | None) -> No
     assert report.counts["success"] == report.samples == 120
     assert report.branch_checked == report.samples
     assert report.continuity_checked == 20
-    assert report.residuals["position_max"] <= 1e-9 and report.residuals["rotation_max"] <= 1e-9
+    # on another description the table's exact branches are off by that description's
+    # deviation from the table (the rounded URDF: ~1e-9 rad)
+    allowed = 1e-9 + max(report.reference_deviation.values(), default=0.0)
+    assert report.residuals["position_max"] <= allowed
+    assert report.residuals["rotation_max"] <= allowed
 
 
 @pytest.mark.parametrize("name", ["ur5", "aubo_i10", "abb_irb1200_7_70", "anthropomorphic_arm"])
-def test_our_ik_passes_on_its_own_urdf(name: str) -> None:
-    """dhkin's own IK on the exact generated URDF: zero wrong, zero missing, no missing branch.
-    Known finding of the continuity check: where the elbow is stretched or folded (q3 = 0 or
-    pi) *and* q5 = 0 or pi, today's UR IK takes q6 from the seed and the 2R sub-problem
-    amplifies a 0.05 rad seed change into ~0.5 rad of q2: those samples (only those) may come
-    out "discontinuous"."""
+@pytest.mark.parametrize("reference", ["exact", "rounded"])
+def test_our_ik_passes_on_its_own_urdf(name: str, reference: str) -> None:
+    """dhkin's own IK on the generated URDF, exact and rounded to 10 digits: every check passes
+    (no wrong, missing, missing-branch or discontinuous sample; the stretched or folded elbow
+    at q5 = 0 or pi, where a seed's q6 once moved q2 by 0.5 rad, included)."""
     robot = dhkin.load(name)
-    report = validate(robot, n=N, seed=1, reference="exact")
+    report = validate(robot, n=N, seed=1, reference=reference)
     assert report.samples == N + 2 * (N // 10)
-    assert report.counts["success"] + report.counts["discontinuous"] == report.samples, \
-        report.summary()
-    for failure in report.failures:
-        q = np.array(failure.q_sampled)
-        assert abs(np.sin(q[2])) < 1e-12 and abs(np.sin(q[4])) < 1e-12, failure
+    assert report.ok and report.counts["success"] == report.samples, report.summary()
     assert set(report.by_set) == {"uniform", "special", "near_singular"}
-    assert report.residuals["position_max"] <= 1e-9
-    assert report.residuals["rotation_max"] <= 1e-9
+    allowed = 1e-9 + max(report.reference_deviation.values(), default=0.0)
+    assert report.residuals["position_max"] <= allowed
+    assert report.residuals["rotation_max"] <= allowed
     assert report.solution_counts["min"] >= 1
     assert report.by_configuration, "samples are labelled with their configuration"
 

@@ -303,7 +303,12 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
     position, rotation = _error_vector(frames[n], T, e)
     size = position * position + rotation * rotation
     best_position, best_rotation, best_size = position, rotation, size
-    damping = 0.0
+    # Directions along which even a maximal joint step moves the pose by less than the goal
+    # (singular values below goal / MAX_JOINT_STEP, e.g. the free joint of an exactly singular
+    # wrist) carry no information: this damping floor suppresses them, keeping the step the
+    # minimum-norm one, while sigma ~ 1e-8 (a chain a hair from singular) stays fully active.
+    floor = (goal / MAX_JOINT_STEP) ** 2
+    damping = floor
     evaluations = 1
     for _ in range(MAX_STEPS):
         if (position <= goal and rotation <= goal) or evaluations >= budget:
@@ -324,7 +329,7 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
                 trial_size = trial_position * trial_position + trial_rotation * trial_rotation
                 taken = trial_size <= GROWTH * GROWTH * size
             if not taken:
-                damping = max(100.0 * damping, DAMPING_START)
+                damping = max(100.0 * damping, DAMPING_START + floor)
                 if damping > DAMPING_LIMIT or evaluations >= budget:
                     break
         if not taken:
@@ -337,7 +342,7 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
             for k in range(12):
                 frames[j, k] = trial_frames[j, k]
         position, rotation, size = trial_position, trial_rotation, trial_size
-        damping = 0.1 * damping if damping > DAMPING_START else 0.0
+        damping = max(0.1 * damping, floor) if damping > DAMPING_START else floor
         if size < best_size:
             best_position, best_rotation, best_size = position, rotation, size
             for a in range(n):
@@ -438,3 +443,57 @@ def refine_along(ideal: NDArray[np.float64], exact: NDArray[np.float64],
         state = np.empty(12)
         return check(exact, q, T, state)
     return position, rotation
+
+
+#: Steps (rad, along the unit weakest direction) tried from a solution to find a twin root that
+#: the refinement lost to it (two starts that converged to one solution near a fold).
+TWIN_STEPS = (0.02, 0.05, 0.1, 0.2, 0.4, 0.7)
+
+
+@jit
+def find_twin(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
+              tolerance: float, distinct: float, known: NDArray[np.float64],
+              known_ok: NDArray[np.bool_], out: NDArray[np.float64]) -> bool:
+    """A solution near the solution q (n,) on the far side of the fold it sits by, other than
+    q and the ``known`` rows (B, n) marked ``known_ok``: Newton from q displaced along the right
+    singular vector of the smallest singular value of J(q), TWIN_STEPS each way. out receives
+    the first verified one that differs from all of them by more than ``distinct`` on some joint
+    (mod 2pi); False when none does."""
+    n = q.shape[0]
+    frames = np.empty((n + 1, 12))
+    J = np.empty((6, n))
+    fk_frames(chain, q, frames)
+    _jacobian(chain, frames, J)
+    _, _, vt = np.linalg.svd(J)
+    weakest = vt[n - 1]
+    largest = np.abs(weakest).max()
+    fixed = np.zeros(n, np.bool_)
+    state = np.empty(12)
+    for size in TWIN_STEPS:
+        for sign in (1.0, -1.0):
+            for j in range(n):
+                out[j] = q[j] + sign * size * weakest[j] / largest
+            refine(chain, T, out, fixed, tolerance)
+            position, rotation = check(chain, out, T, state)
+            if within(position, rotation, tolerance) and _apart(out, q, distinct):
+                new = True
+                for b in range(known.shape[0]):
+                    if known_ok[b] and not _apart(out, known[b], distinct):
+                        new = False
+                if new:
+                    return True
+    return False
+
+
+@jit
+def _apart(a: NDArray[np.float64], b: NDArray[np.float64], distinct: float) -> bool:
+    """Whether a and b differ by more than ``distinct`` on some joint (mod 2pi)."""
+    largest = 0.0
+    for j in range(a.shape[0]):  # no generator: numba compiles none
+        largest = max(largest, abs(_wrapped(a[j] - b[j])))
+    return largest > distinct
+
+
+@jit
+def _wrapped(x: float) -> float:
+    return x - 2.0 * math.pi * np.floor((x + math.pi) / (2.0 * math.pi))

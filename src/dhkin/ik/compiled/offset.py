@@ -223,6 +223,12 @@ def solve_offset_wrist(g: NDArray[np.float64], T: NDArray[np.float64],
     if shoulder_merged:
         root = 0.0
     shoulder_flag = SHOULDER if shoulder_merged or root <= FLAG_BAND * g[GEOMETRY.scale] else 0
+    # Near the shoulder merge q1 is only as good as the pose over the root: a pose known to
+    # ``clamp`` moves it by ~clamp / root (at most ~sqrt(2 clamp / |c|)), and q5 inherits that:
+    # the wrist counts as near singular within this much more.
+    q1_uncertainty = 0.0
+    if c != 0.0:
+        q1_uncertainty = min(clamp / max(root, 1e-300), math.sqrt(2.0 * clamp / abs(c)))
     shoulder_near = SHOULDER if c == 0.0 and distance <= seed_length else 0
     shoulder_seeded = shoulder_near != 0 and (use_seed & SHOULDER) != 0
     if gap < 0.0:
@@ -253,7 +259,7 @@ def solve_offset_wrist(g: NDArray[np.float64], T: NDArray[np.float64],
         x2 = w6[0] * u1 - w6[1] * u0
         sine = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)  # exact for tiny angles (no arccos)
         wrist_flag = WRIST if sine <= FLAG_BAND else 0
-        wrist_near = WRIST if sine <= seed_angle else 0
+        wrist_near = WRIST if sine <= seed_angle + q1_uncertainty else 0
         wrist_seeded = wrist_near != 0 and (use_seed & WRIST) != 0
         q5_half = atan2(sine, cosine)
         a0, a1, a2 = u0 - cosine * w6[0], u1 - cosine * w6[1], u2 - cosine * w6[2]

@@ -168,9 +168,8 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
     position, rotation = exact.check(chain, values, T, state)
     if not exact.within(position, rotation, tolerance):
         # a clamped or near-singular candidate of an exact table: the closed form's point is
-        # not the best one the chain reaches; Newton's is, and verification decides
-        for j in range(n):
-            fixed[j] = False
+        # not the best one the chain reaches; Newton's is, and verification decides (a seeded
+        # candidate keeps its seeded joints: polished, it is still the seed's choice)
         exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET)
         for j in range(n):
             if chain[j, exact.JOINT.revolute] != 0.0:
@@ -229,7 +228,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
         if not math.isfinite(seed[j]):
             info[INFO.status] = STATUS_BAD_SEED
             return
-    g, chain, _ = plan_parts(plan)
+    g, chain, limits = plan_parts(plan)
     at = 0
     projected = fwork[at:at + 12].reshape(3, 4)
     at += 12
@@ -256,6 +255,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     if wanted != 0:
         _family(plan, g, T_dh, seed, wanted, clamp, seeded_q, seeded_valid, seeded_flags,
                 seeded_near, seeded_why, scratch)
+    regular = q.copy() if plan[PLAN.refine] != 0.0 else q[:0]
     best_position, best_rotation = math.inf, math.inf
     seeded_wrist = bwork[2 * B + n:3 * B + n]
     for b in range(B):
@@ -266,10 +266,19 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             tried = True
             for j in range(n):
                 candidate[j] = seeded_q[b, j]
+            if bits & (SHOULDER | ELBOW):
+                _nearest_member(plan, g, T_dh, seed, bits, b, clamp, candidate, scratch)
             _fix_free(plan, bits, fixed)
             position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
                                          (seeded_near[b] & CLAMPED) != 0, False, tolerance,
                                          state)
+            if exact.within(position, rotation, tolerance) and not _in_limits(
+                    chain, limits, candidate, tolerance / plan[PLAN.lever]):
+                # the seed's member of the family lies outside the joint limits: the nearest
+                # member inside them (the free joint moved off the seed, nearest first)
+                position, rotation = _member_in_limits(
+                    plan, g, chain, limits, T_dh, seed, bits, b, clamp, tolerance, candidate,
+                    scratch, fixed, state)
             if exact.within(position, rotation, tolerance):
                 for j in range(n):
                     q[b, j] = candidate[j]
@@ -312,11 +321,151 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             worse = b + 1 if _size(errors, b) <= _size(errors, b + 1) else b
             ok[worse] = False
     if plan[PLAN.refine] != 0.0:
-        _merge_duplicates(chain, q, ok, errors)
+        _merge_duplicates(chain, T_dh, q, ok, errors, tolerance)
+        _retry_corrected(plan, g, chain, T_dh, seed, clamp, tolerance, regular, valid, near, q,
+                         ok, errors, flags, scratch)
     for b in range(B):
         if ok[b]:
             info[INFO.verified] += 1
     info[INFO.best_position], info[INFO.best_rotation] = best_position, best_rotation
+
+
+#: The nearest member of a one-parameter family (q1 or q2 free): a grid of this half-width and
+#: step (rad) around the seed's value of the free joint, then golden-section search to
+#: MEMBER_PRECISION within a step of the best grid point (the distance has kinks: no
+#: derivatives).
+MEMBER_HALF_WIDTH = 0.5
+MEMBER_STEP = 0.05
+MEMBER_GRID = round(MEMBER_HALF_WIDTH / MEMBER_STEP)
+MEMBER_PRECISION = 1e-9
+_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+
+
+@jit
+def _member_distance(plan: NDArray[np.float64], g: NDArray[np.float64],
+                     T: NDArray[np.float64], seed: NDArray[np.float64],
+                     moved: NDArray[np.float64], free: int, t: float, bits: int, b: int,
+                     clamp: float, q: NDArray[np.float64], valid: NDArray[np.bool_],
+                     flags: NDArray[np.uint8], near: NDArray[np.uint8],
+                     why: NDArray[np.float64], scratch: NDArray[np.float64]) -> float:
+    """Squared joint distance (revolute differences wrapped) from the seed of branch b's member
+    with the free joint at t; inf where the branch has no such member."""
+    moved[free] = t
+    _family(plan, g, T, moved, bits, clamp, q, valid, flags, near, why, scratch)
+    if not valid[b] or (near[b] & bits) != bits:
+        return math.inf
+    _, chain, _ = plan_parts(plan)
+    total = 0.0
+    for j in range(seed.shape[0]):
+        difference = q[b, j] - seed[j]
+        if chain[j, exact.JOINT.revolute] != 0.0:
+            difference = wrap(difference)
+        total += difference * difference
+    return total if math.isfinite(total) else math.inf
+
+
+@jit
+def _nearest_member(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArray[np.float64],
+                    seed: NDArray[np.float64], bits: int, b: int, clamp: float,
+                    candidate: NDArray[np.float64], scratch: NDArray[np.float64]) -> None:
+    """Where the pose leaves q1 (SHOULDER) or q2 (ELBOW) free: branch b's member of the family
+    nearest the seed over all joints (the other joints follow the free one: near a second
+    singularity they follow it fast), into ``candidate`` (left as it is when none is nearer)."""
+    n = seed.shape[0]
+    free = int(plan[PLAN.free_shoulder]) if bits & SHOULDER else int(plan[PLAN.free_elbow])
+    q = np.empty((BRANCHES, n))
+    valid = np.empty(BRANCHES, np.bool_)
+    flags = np.empty(BRANCHES, np.uint8)
+    near = np.empty(BRANCHES, np.uint8)
+    why = np.empty(WHY_SIZE)
+    moved = seed.copy()
+    best_t, best = seed[free], math.inf
+    for k in range(-MEMBER_GRID, MEMBER_GRID + 1):
+        t = seed[free] + k * MEMBER_STEP
+        value = _member_distance(plan, g, T, seed, moved, free, t, bits, b, clamp, q, valid,
+                                 flags, near, why, scratch)
+        if value < best:
+            best_t, best = t, value
+    if best == math.inf:
+        return
+    low, high = best_t - MEMBER_STEP, best_t + MEMBER_STEP
+    a = high - _GOLDEN * (high - low)
+    c = low + _GOLDEN * (high - low)
+    value_a = _member_distance(plan, g, T, seed, moved, free, a, bits, b, clamp, q, valid,
+                               flags, near, why, scratch)
+    value_c = _member_distance(plan, g, T, seed, moved, free, c, bits, b, clamp, q, valid,
+                               flags, near, why, scratch)
+    while high - low > MEMBER_PRECISION:
+        if value_a <= value_c:
+            high, c, value_c = c, a, value_a
+            a = high - _GOLDEN * (high - low)
+            value_a = _member_distance(plan, g, T, seed, moved, free, a, bits, b, clamp, q,
+                                       valid, flags, near, why, scratch)
+        else:
+            low, a, value_a = a, c, value_c
+            c = low + _GOLDEN * (high - low)
+            value_c = _member_distance(plan, g, T, seed, moved, free, c, bits, b, clamp, q,
+                                       valid, flags, near, why, scratch)
+    t = 0.5 * (low + high)
+    if _member_distance(plan, g, T, seed, moved, free, t, bits, b, clamp, q, valid, flags,
+                        near, why, scratch) > best:
+        _member_distance(plan, g, T, seed, moved, free, best_t, bits, b, clamp, q, valid,
+                         flags, near, why, scratch)
+    for j in range(n):
+        candidate[j] = q[b, j]
+
+
+#: Moves (rad or m) of a free joint off the seed tried, nearest first, when the seed's member of
+#: a singular family lies outside the joint limits.
+LIMIT_STEPS = (0.02, -0.02, 0.05, -0.05, 0.1, -0.1, 0.2, -0.2, 0.4, -0.4, 0.8, -0.8)
+
+
+@jit
+def _in_limits(chain: NDArray[np.float64], limits: NDArray[np.float64],
+               values: NDArray[np.float64], slack: float) -> bool:
+    """Whether some 2pi copy of every joint value lies within the limits (+- slack)."""
+    for j in range(values.shape[0]):
+        _, count = turn_range(limits[j, 0], limits[j, 1],
+                              chain[j, exact.JOINT.revolute] != 0.0, values[j], slack)
+        if count == 0:
+            return False
+    return True
+
+
+@jit
+def _member_in_limits(plan: NDArray[np.float64], g: NDArray[np.float64],
+                      chain: NDArray[np.float64], limits: NDArray[np.float64],
+                      T: NDArray[np.float64], seed: NDArray[np.float64], bits: int, b: int,
+                      clamp: float, tolerance: float, candidate: NDArray[np.float64],
+                      scratch: NDArray[np.float64], fixed: NDArray[np.bool_],
+                      state: NDArray[np.float64]) -> tuple[float, float]:
+    """Branch b's seeded candidate with the free joint(s) of ``bits`` moved off the seed by
+    LIMIT_STEPS, the first that verifies and lies within the limits, into ``candidate``;
+    returns its errors (inf when none)."""
+    n = seed.shape[0]
+    q = np.empty((BRANCHES, n))
+    valid = np.empty(BRANCHES, np.bool_)
+    flags = np.empty(BRANCHES, np.uint8)
+    near = np.empty(BRANCHES, np.uint8)
+    why = np.empty(WHY_SIZE)
+    moved = seed.copy()
+    _fix_free(plan, bits, fixed)
+    for step in LIMIT_STEPS:
+        for j in range(n):
+            moved[j] = seed[j] + (step if fixed[j] else 0.0)
+        _family(plan, g, T, moved, bits, clamp, q, valid, flags, near, why, scratch)
+        if not valid[b] or (near[b] & bits) != bits:
+            continue
+        for j in range(n):
+            candidate[j] = q[b, j]
+        _fix_free(plan, bits, fixed)
+        position, rotation = _settle(plan, chain, T, candidate, fixed,
+                                     (near[b] & CLAMPED) != 0, False, tolerance, state)
+        if exact.within(position, rotation, tolerance) and _in_limits(
+                chain, limits, candidate, tolerance / plan[PLAN.lever]):
+            return position, rotation
+        _fix_free(plan, bits, fixed)
+    return math.inf, math.inf
 
 
 @jit
@@ -325,10 +474,15 @@ def _size(errors: NDArray[np.float64], b: int) -> float:
 
 
 @jit
-def _merge_duplicates(chain: NDArray[np.float64], q: NDArray[np.float64], ok: NDArray[np.bool_],
-                      errors: NDArray[np.float64]) -> None:
-    """Branches of a refined table that converged to one solution: keep the first."""
+def _merge_duplicates(chain: NDArray[np.float64], T: NDArray[np.float64],
+                      q: NDArray[np.float64], ok: NDArray[np.bool_],
+                      errors: NDArray[np.float64], tolerance: float) -> None:
+    """Branches of a refined table that converged to one solution: the second looks for the
+    twin root it lost (:func:`.chain.find_twin`) and keeps it when that is a new solution; else
+    it is merged into the first."""
     B, n = q.shape
+    twin = np.empty(n)
+    state = np.empty(12)
     for a in range(B):
         if not ok[a]:
             continue
@@ -343,10 +497,113 @@ def _merge_duplicates(chain: NDArray[np.float64], q: NDArray[np.float64], ok: ND
                 same = same and abs(difference) <= 2.0 * MERGE_ANGLE
             if same:
                 ok[b] = False
+                if exact.find_twin(chain, T, q[a], tolerance, 2.0 * MERGE_ANGLE, q, ok, twin):
+                    ok[b] = True
+                    for j in range(n):
+                        q[b, j] = wrap(twin[j]) if chain[j, exact.JOINT.revolute] else twin[j]
+                    errors[b, 0], errors[b, 1] = exact.check(chain, q[b], T, state)
+                    continue
+                ok[b] = False
                 if _size(errors, b) < _size(errors, a):
                     for j in range(n):
                         q[a, j] = q[b, j]
                     errors[a, 0], errors[a, 1] = errors[b, 0], errors[b, 1]
+
+
+#: Corrected-target retries of a lost branch (each one family solve and one refinement).
+CORRECTIONS = 2
+
+
+@jit
+def _retry_corrected(plan: NDArray[np.float64], g: NDArray[np.float64],
+                     chain: NDArray[np.float64], T: NDArray[np.float64],
+                     seed: NDArray[np.float64], clamp: float, tolerance: float,
+                     regular: NDArray[np.float64], valid: NDArray[np.bool_],
+                     near: NDArray[np.uint8], q: NDArray[np.float64], ok: NDArray[np.bool_],
+                     errors: NDArray[np.float64], flags: NDArray[np.uint8],
+                     scratch: NDArray[np.float64]) -> None:
+    """A refined table's branch that did not settle, or that settled on another branch's
+    solution, is tried again from the ideal model's closed form for the *corrected* target
+    T' = FK_ideal(q_c) FK_exact(q_c)^-1 T, q_c its candidate: to first order the ideal model
+    then sees the pose where the exact chain does (near a fold of the arm, where the ideal
+    model's roots merge or vanish while the exact chain's do not, this moves the start to the
+    right side of the fold). Up to CORRECTIONS times, each candidate refined and verified."""
+    B, n = q.shape
+    ideal, _ = model_path(plan)
+    corrected = np.empty((3, 4))
+    candidates = np.empty((B, n))
+    c_valid = np.empty(B, np.bool_)
+    c_flags = np.empty(B, np.uint8)
+    c_near = np.empty(B, np.uint8)
+    c_why = np.empty(WHY_SIZE)
+    fixed = np.zeros(n, np.bool_)
+    state = np.empty(12)
+    for b in range(B):
+        if ok[b] or not _finite(regular[b]) or not (valid[b] or (near[b] & CLAMPED) != 0):
+            continue
+        start = regular[b].copy()
+        for _ in range(CORRECTIONS):
+            _corrected_target(ideal, chain, start, T, corrected)
+            _family(plan, g, corrected, seed, 0, clamp, candidates, c_valid, c_flags, c_near,
+                    c_why, scratch)
+            if not _finite(candidates[b]):
+                break
+            for j in range(n):
+                start[j] = candidates[b, j]
+            trial = start.copy()
+            exact.refine(chain, T, trial, fixed, tolerance)
+            position, rotation = exact.check(chain, trial, T, state)
+            if exact.within(position, rotation, tolerance):
+                if not _known(chain, q, ok, trial):
+                    for j in range(n):
+                        q[b, j] = wrap(trial[j]) if chain[j, exact.JOINT.revolute] else trial[j]
+                    ok[b] = True
+                    errors[b, 0], errors[b, 1] = exact.check(chain, q[b], T, state)
+                    flags[b] = c_flags[b]
+                break
+
+
+@jit
+def _corrected_target(ideal: NDArray[np.float64], chain: NDArray[np.float64],
+                      q: NDArray[np.float64], T: NDArray[np.float64],
+                      out: NDArray[np.float64]) -> None:
+    """out (3, 4) = FK_ideal(q) FK_exact(q)^-1 T (rigid 3 x 4 frames)."""
+    model = np.empty(12)
+    real = np.empty(12)
+    exact.fk(ideal, q, model)
+    exact.fk(chain, q, real)
+    A, E = np.eye(4), np.eye(4)
+    for r in range(3):
+        for c in range(4):
+            A[r, c] = model[4 * r + c]
+            E[r, c] = real[4 * r + c]
+    target = np.eye(4)
+    target[:3, :] = T
+    inverse = np.eye(4)
+    inverse[:3, :3] = E[:3, :3].T
+    inverse[:3, 3] = -(E[:3, :3].T @ E[:3, 3])
+    result = A @ inverse @ target
+    for r in range(3):
+        for c in range(4):
+            out[r, c] = result[r, c]
+
+
+@jit
+def _known(chain: NDArray[np.float64], q: NDArray[np.float64], ok: NDArray[np.bool_],
+           candidate: NDArray[np.float64]) -> bool:
+    """Whether ``candidate`` equals an ok branch's solution (2 MERGE_ANGLE, mod 2pi)."""
+    for b in range(q.shape[0]):
+        if not ok[b]:
+            continue
+        same = True
+        for j in range(q.shape[1]):
+            difference = candidate[j] - q[b, j]
+            if chain[j, exact.JOINT.revolute] != 0.0:
+                difference = wrap(difference)
+            same = same and abs(difference) <= 2.0 * MERGE_ANGLE
+        if same:
+            return True
+    return False
 
 
 @jit

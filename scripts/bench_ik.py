@@ -59,7 +59,8 @@ from dhkin.transforms import invert, pose_error
 EXACT = 1e-9
 COMPLETE = 1e-6
 TWO_PI = 2.0 * math.pi
-DEFAULT_ROBOTS = ("abb_irb1200_7_70", "ur5")
+DEFAULT_ROBOTS = ("abb_irb1200_7_70", "ur5", "ur5e", "ur5e_calibrated", "tm5_900",
+                  "kinova_gen3_6dof")
 PEERS = ("eaik", "opw", "ikgeo", "rtb")
 #: OPW parameters (py-opw-kinematics conventions) of the robots that have them; checked against
 #: dhkin's FK before use.
@@ -187,7 +188,7 @@ def poe_of(robot: dhkin.Robot, meeting: Sequence[Sequence[int]]
     """Product-of-exponentials model of the table at q = 0 (DH frame 0): axes h (6, 3) times
     each joint's direction, offsets p (7, 3) between points on consecutive axes (axes that meet
     share their meeting point), and the DH flange M (4, 4) at q = 0."""
-    from dhkin.ik.spherical_wrist import common_point, zero_configuration
+    from dhkin.ik.geometry import common_point, zero_configuration
 
     axes, M = zero_configuration(robot.table)
     h = np.array([a.direction * j.direction for a, j in zip(axes, robot.table.joints,
@@ -445,21 +446,22 @@ def measure(robot: dhkin.Robot, libraries: list[Library], generic: PoseSet, sing
 
 
 def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[str, float]]:
-    """Per pose (us): the kernel stages of ik_batch(copies=False) and the Python around them,
-    and the single-pose call split into its kernel and the rest."""
-    pipeline = robot._ik_pipeline
-    kernels = pipeline.kernels
-    n, B, dof = len(poses.T), pipeline.n_branches, robot.dof
-    tolerances = pipeline.tolerances(1e-9)
-    T_dh = np.ascontiguousarray(pipeline.frames[0] @ poses.T @ pipeline.frames[1])
+    """Per pose (us): the two kernels of ik_batch(copies=False) (every branch's verified
+    solution; the in-limit copy nearest the seed of each) and the Python around them, and the
+    single-pose call split into its kernel and the rest."""
+    solver = robot.ik_solver
+    kernels = solver_kernels()
+    n, B, dof = len(poses.T), solver.n_branches, robot.dof
+    T = np.ascontiguousarray(poses.T)
     seeds = np.zeros((1, dof))
     q = np.empty((n, B, dof))
-    valid = np.empty((n, B), bool)
-    flags = np.zeros((n, B), np.uint8)
-    ok, recheck = np.empty((n, B), bool), np.empty((n, B), bool)
+    ok = np.empty((n, B), np.bool_)
+    flags = np.empty((n, B), np.uint8)
+    errors = np.empty((n, B, 2))
     totals = np.empty((n, B), np.int64)
-    status = np.empty(n, np.int8)
-    branch = np.empty((n, B), np.int16)
+    why = np.empty((n, kernels.WHY_SIZE))
+    info = np.empty((n, kernels.INFO.size))
+    out = solver._batch_arrays(n, B)
 
     def best(call: Callable[[], object]) -> float:  # fastest of the runs: least disturbed
         call()
@@ -474,44 +476,52 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
             gc.enable()
         return min(times) / n * 1e6
 
-    check = best(lambda: kernels.check_targets(poses.T, status))
-    solve = best(lambda: kernels.solve_branches(pipeline.family_id, pipeline.geometry, T_dh,
-                                                seeds, q, valid, flags))
-    principal = q.copy()
-
-    def finish() -> None:
-        q[:] = principal
-        kernels.finish_principal(pipeline.chain, pipeline.modified, pipeline.limits, T_dh,
-                                 tolerances, q, valid, ok, recheck, totals)
-
-    copy_cost = best(lambda: q.__setitem__(slice(None), principal))
-    verify = best(finish) - copy_cost
-    whole = best(lambda: kernels.solve_principal(
-        pipeline.family_id, pipeline.geometry, pipeline.chain, pipeline.modified,
-        pipeline.limits, pipeline.frames, poses.T, seeds, tolerances, q, ok, flags, recheck,
-        totals, status))
-    expand = best(lambda: kernels.expand(
-        pipeline.chain, pipeline.modified, pipeline.limits, pipeline.frames, poses.T,
-        tolerances, False, q.copy(), ok.copy(), flags.copy(), recheck, totals, q, ok, flags,
-        branch, True)) - best(lambda: (q.copy(), ok.copy(), flags.copy()))
-    batch = best(lambda: robot.ik_batch(poses.T, copies=False))
-    robot.ik(poses.T[0])  # this thread's buffers
-    out_q, out_errors, out_keys, scratch = pipeline._buffers.arrays
-    sample = poses.T[:2000]
-    entry_point = pipeline._one_kernel  # what robot.ik calls: no per-call type resolution
-    kernel_one = best_single(lambda T: entry_point(
-        pipeline.plan, pipeline.frames, T, pipeline._zero_seed, tolerances, False, out_q,
-        out_errors, out_keys, scratch), sample, runs)
-    whole_one = best_single(lambda T: robot.ik(T, copies=False), sample, runs)
-    return [("input check", check), ("family solver (8 branches)", solve),
-            ("wrap + FK check of each branch + copy count", verify),
-            ("principal kernel (the three above, fused)", whole),
-            ("one solution per branch, packing", expand),
-            ("ik_batch minus its two kernels (Python, allocation)", batch - whole - expand),
+    branches = best(lambda: kernels.solve_batch(solver.plan, solver.frames, T, seeds, 1e-9,
+                                                False, q, ok, flags, errors, totals, why, info))
+    expand = best(lambda: kernels.expand_batch(solver.plan, solver.frames, T, seeds, 1e-9, False,
+                                               q, ok, flags, errors, *out))
+    batch = best(lambda: robot.ik_batch(T, copies=False))
+    robot.ik(T[0])  # this thread's buffers
+    buffers = solver._buffers.arrays
+    sample = T[:2000]
+    entry_point = solver._one_kernel  # what robot.ik calls: no per-call type resolution
+    kernel_one = best_single(lambda pose: entry_point(
+        solver.plan, solver.frames, pose, solver._zero_seed, 1e-9, False, *buffers), sample,
+        runs)
+    whole_one = best_single(lambda pose: robot.ik(pose, copies=False), sample, runs)
+    return [("every branch's verified solution (kernel)", branches),
+            ("in-limit copy nearest the seed, packing (kernel)", expand),
+            ("ik_batch minus its two kernels (Python, allocation)", batch - branches - expand),
             ("ik_batch(copies=False), total", batch),
             ("single pose: kernel call (with argument passing)", kernel_one),
             ("single pose: Python around it (result object)", whole_one - kernel_one),
             ("single pose: ik(copies=False), total", whole_one)]
+
+
+def refined_against_ideal(robot: dhkin.Robot, poses: PoseSet, runs: int,
+                          latency_poses: int) -> list[str]:
+    """A refined table (closed form on its ideal model, then Newton on the exact chain)
+    against its ideal model solved exactly, on the same poses: per-pose time ratios."""
+    ideal = dhkin.Robot(robot.ik_solver.fit.ideal)
+    rows = []
+    for who in (robot, ideal):
+        library = dhkin_library(who, copies=False)
+        library.use(poses)
+        rows.append((timed_single(library, latency_poses, runs),
+                     timed_batch(library, len(poses.T), runs)[0]))
+    (single, batch), (ideal_single, ideal_batch) = rows
+    ratio_single, ratio_batch = single / ideal_single, ideal_batch / batch
+    verdict = "met" if max(ratio_single, ratio_batch) <= 2.0 else "missed"
+    return [f"Refined table against its ideal model (same poses; target: within 2x): single "
+            f"{single:.1f} us vs {ideal_single:.1f} us (x{ratio_single:.2f}), batch "
+            f"{batch:,.0f} vs {ideal_batch:,.0f} poses/s (x{ratio_batch:.2f}): {verdict}.", ""]
+
+
+def solver_kernels() -> Any:
+    """The compiled pipeline (dhkin.ik.compiled.pipeline)."""
+    from dhkin.ik.compiled import pipeline
+
+    return pipeline
 
 
 def best_single(call: Callable[[NDArray[np.float64]], object], poses: NDArray[np.float64],
@@ -672,6 +682,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             lines.append(f"Single pose {rows[0].single_us:.1f} us vs EAIK {eaik.single_us:.1f} "
                          f"us: {verdict} (ratio {rows[0].single_us / eaik.single_us:.2f}).")
         lines.append("")
+        if robot.has_closed_form and robot.ik_solver.fit.refine:
+            lines += refined_against_ideal(robot, generic, args.runs, args.latency_poses)
         if args.profile:
             lines += [f"Where dhkin's time goes ({robot.name}, per pose, us; each stage timed on "
                       f"its own, fastest of {args.runs} runs):", "",

@@ -140,9 +140,15 @@ def test_ik_json_round_trip(capsys) -> None:
     assert code == 0
     data = json.loads(out)
     solutions = np.array([s["q"] for s in data["solutions"]])
-    assert solutions.shape[0] >= 8
+    assert solutions.shape[0] == 8  # one per branch by default
     poses = robot.reference().fk(solutions)
     assert np.abs(poses - T).max() < 1e-9
+    code, out, _ = run(capsys, "ik", "ur5", "--xyz", *map(str, T[:3, 3]),
+                       "--rpy", *map(str, matrix_to_rpy(T)), "--json", "--all-copies")
+    assert code == 0
+    every = np.array([s["q"] for s in json.loads(out)["solutions"]])
+    assert len(every) == len(robot.ik(T, copies=True)) > 8
+    assert np.abs(robot.reference().fk(every) - T).max() < 1e-9
 
 
 @pytest.mark.parametrize("command", ["robots", "export", "compare", "fk", "ik", "validate",

@@ -60,6 +60,7 @@ def test_4_1_1_solver_finds_the_three_and_a_fourth_arm_solution(load_robot):
     -3.2828 appearing as its 2pi copy 3.0004 (limits +-180 deg), and (-3.2828, 3pi/4, pi/2)."""
     robot = load_robot("anthropomorphic_arm")
     sols = robot.ik(robot.reference().fk(Q_4_1_2))
+    assert len(sols) == 8  # one per branch: 4 arms x 2 wrists
     arms = np.unique(np.round(sols.q[:, :3], 9), axis=0)
     assert len(arms) == 4
     expected = [*ARM_SOLUTIONS_4_1_1, (-3.2828, 3 * PI / 4, PI / 2)]
@@ -84,7 +85,7 @@ def test_4_1_2_second_wrist_solution_and_the_seed_slip_in_q6(load_robot):
     assert abs(rotation - PI) < 1e-12  # ... but the seed's q6 = pi/2 turns it by a half turn
     position, rotation = pose_error(reference.fk(CORRECTED_OTHER_4_1_2), T)
     assert position < 1e-12 and rotation < 1e-12
-    sols = robot.ik(T)
+    sols = robot.ik(T, copies=True)  # every in-limit 2pi copy
 
     def distance(q: np.ndarray) -> float:
         return float(np.abs(sols.q - q).max(axis=1).min())
@@ -97,6 +98,15 @@ def test_4_1_2_second_wrist_solution_and_the_seed_slip_in_q6(load_robot):
     flip = [c.labels["wrist"] for q, c in zip(sols.q, sols.configurations, strict=True)
             if np.abs(q - CORRECTED_OTHER_4_1_2).max() < 1e-12]
     assert flip == ["flip"]
+    # by default one solution per branch (8: 4 arms x 2 wrists), the copy nearest 0: the flip
+    # once, with q4 = -pi or +pi (equally near 0); with the seed q4 = -pi, that copy
+    default = robot.ik(T)
+    assert len(default) == 8
+    gaps = np.abs(wrapped_difference(default.q, CORRECTED_OTHER_4_1_2)).max(axis=1)
+    assert np.sum(gaps < 1e-12) == 1
+    seeded = robot.ik(T, q_seed=CORRECTED_OTHER_4_1_2)
+    assert np.abs(seeded.q - CORRECTED_OTHER_4_1_2).max(axis=1).min() < 1e-12
+    assert np.abs(seeded.q - Q_4_1_2).max(axis=1).min() < 1e-12
 
 
 # --------------------------------------------------------------------------------------------

@@ -115,7 +115,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
     robot = load(args.robot)
     T = _target(args)
     seed = None if args.seed is None else _joint_values(robot, args.seed, args.deg)
-    solutions = robot.ik(T, q_seed=seed)
+    solutions = robot.ik(T, q_seed=seed, copies=args.all_copies)
     revolute = np.array([j.is_revolute for j in robot.table.joints])
     shown = np.where(revolute & args.deg, np.degrees(solutions.q), solutions.q)
     if args.json:
@@ -237,13 +237,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frame", default="tool0", help="frame of the generated URDF")
     p.set_defaults(run=cmd_fk)
 
-    p = sub.add_parser("ik", help="every closed-form IK solution of a pose")
+    p = sub.add_parser("ik", help="the IK solutions of a pose: one per branch, its in-limit "
+                                  "2pi copy nearest the seed (every copy: --all-copies)")
     _robot_arg(p)
     p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"), help="position (m)")
     p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
                    help="URDF roll-pitch-yaw of tool0 (rad, or --deg)")
     p.add_argument("--matrix", help="file with the 4x4 pose base_link -> tool0")
-    p.add_argument("--seed", type=float, nargs="+", help="joint values for free joints")
+    p.add_argument("--seed", type=float, nargs="+",
+                   help="joint values: each branch's copy nearest them, and the free joints at "
+                        "a singularity (default 0)")
+    p.add_argument("--all-copies", action="store_true",
+                   help="every in-limit 2pi copy of every branch, not only the nearest")
     p.add_argument("--deg", action="store_true", help="angles in and out in degrees")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(run=cmd_ik)

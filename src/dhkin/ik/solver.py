@@ -275,7 +275,9 @@ class ClosedFormSolver:
         return seeds
 
     def _clamp(self, tolerance: float) -> float:
-        return tolerance + float(self.plan[_kernels().PLAN.deviation])
+        """The reach band of the kernels (dhkin.ik.compiled.pipeline, ``clamp``)."""
+        PLAN = _kernels().PLAN
+        return tolerance * (1.0 + float(self.plan[PLAN.lever])) + float(self.plan[PLAN.deviation])
 
     # -- one pose -----------------------------------------------------------------------------
 

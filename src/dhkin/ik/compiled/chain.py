@@ -274,7 +274,7 @@ def _least_squares(J: NDArray[np.float64], e: NDArray[np.float64], fixed: NDArra
 @jit
 def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
            fixed: NDArray[np.bool_], tolerance: float,
-           budget: int = 4 * MAX_STEPS) -> tuple[float, float]:
+           budget: int = 4 * MAX_STEPS, growth: float = GROWTH) -> tuple[float, float]:
     """Newton's method on the exact chain from q (n,), in place, towards the target T (3, 4),
     DH frame 0 -> n; joints marked ``fixed`` keep their value (the seed's choice of a free joint
     at a singularity). q ends as the best iterate; returns its (position, rotation) errors.
@@ -282,8 +282,10 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
     Each step minimises |J dq - e|^2 + lambda sum_j (|J_j| dq_j)^2 over the free joints by QR
     (:func:`_least_squares`; lambda = 0 is Gauss-Newton), shortened to MAX_JOINT_STEP per
     joint. A step is taken
-    unless it makes |e| more than GROWTH times larger; then lambda grows (DAMPING_START, x100)
-    and the step is solved again. Stops when both errors are below REFINE_FRACTION *
+    unless it makes |e| more than ``growth`` times larger (GROWTH: Newton may cross a hump on its
+    way to a far root; 1: a monotone Levenberg-Marquardt descent to the least-squares point, for
+    targets a hair beyond a fold); then lambda grows (DAMPING_START, x100) and the step is solved
+    again. Stops when both errors are below REFINE_FRACTION *
     tolerance, after MAX_STEPS, after ``budget`` evaluations of the chain, or when lambda passes
     DAMPING_LIMIT.
     """
@@ -327,7 +329,7 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
                 evaluations += 1
                 trial_position, trial_rotation = _error_vector(trial_frames[n], T, trial_e)
                 trial_size = trial_position * trial_position + trial_rotation * trial_rotation
-                taken = trial_size <= GROWTH * GROWTH * size
+                taken = trial_size <= growth * growth * size
             if not taken:
                 damping = max(100.0 * damping, DAMPING_START + floor)
                 if damping > DAMPING_LIMIT or evaluations >= budget:
@@ -448,6 +450,47 @@ def refine_along(ideal: NDArray[np.float64], exact: NDArray[np.float64],
 #: Steps (rad, along the unit weakest direction) tried from a solution to find a twin root that
 #: the refinement lost to it (two starts that converged to one solution near a fold).
 TWIN_STEPS = (0.02, 0.05, 0.1, 0.2, 0.4, 0.7)
+
+
+#: Steps (along the unit weakest direction) tried from a candidate clamped onto a fold, where
+#: J is singular and Newton cannot leave: the roots a hair inside lie ~sqrt(violation) away.
+OFF_FOLD_STEPS = (1e-6, 1e-5, 1e-4, 1e-3, 1e-2)
+
+
+@jit
+def off_fold(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
+             fixed: NDArray[np.bool_], tolerance: float, budget: int) -> tuple[float, float]:
+    """Newton from q (in place) displaced along J's weakest direction by OFF_FOLD_STEPS, each
+    way, until one verifies; q keeps the best result; returns its errors."""
+    n = q.shape[0]
+    frames = np.empty((n + 1, 12))
+    J = np.empty((6, n))
+    fk_frames(chain, q, frames)
+    _jacobian(chain, frames, J)
+    for j in range(n):
+        if fixed[j]:
+            for r in range(6):
+                J[r, j] = 0.0
+    _, _, vt = np.linalg.svd(J)
+    weakest = vt[n - 1]
+    largest = np.abs(weakest).max()
+    state = np.empty(12)
+    best = q.copy()
+    best_position, best_rotation = check(chain, q, T, state)
+    trial = np.empty(n)
+    for size in OFF_FOLD_STEPS:
+        for sign in (1.0, -1.0):
+            for j in range(n):
+                trial[j] = best[j] + sign * size * weakest[j] / largest
+            refine(chain, T, trial, fixed, tolerance, budget)
+            position, rotation = check(chain, trial, T, state)
+            if max(position, rotation) < max(best_position, best_rotation):
+                best_position, best_rotation = position, rotation
+                for j in range(n):
+                    q[j] = trial[j]
+            if within(position, rotation, tolerance):
+                return position, rotation
+    return best_position, best_rotation
 
 
 @jit

@@ -26,7 +26,8 @@ def wrap(value: float) -> float:
     r = np.fmod(math.pi - value, TWO_PI)
     if r < 0.0:
         r += TWO_PI
-    return math.pi - r
+    wrapped = math.pi - r
+    return wrapped + TWO_PI if wrapped <= -math.pi else wrapped  # -pi itself belongs to pi
 
 
 @jit

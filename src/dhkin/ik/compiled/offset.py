@@ -196,6 +196,7 @@ def solve_offset_wrist(g: NDArray[np.float64], T: NDArray[np.float64],
     docstring). work: (>= 16,) floats."""
     T_home = work[:12].reshape(3, 4)
     member = work[12:16]
+    member_flag = np.zeros(1, np.int64)
     H = GEOMETRY.home_inverse  # T_home = T @ M^-1
     for r in range(3):
         for c in range(4):
@@ -297,10 +298,11 @@ def solve_offset_wrist(g: NDArray[np.float64], T: NDArray[np.float64],
                 for e in range(2):
                     b = 4 * s + 2 * e + w
                     if _nearest_member(g, T_home, c1, s1, q5, reach_side, seed, use_seed,
-                                       seed_length, clamp, e, member):
+                                       seed_length, clamp, e, member, member_flag):
                         q[b, 1], q[b, 2], q[b, 3], q[b, 5] = member[0], member[1], member[2], \
                             member[3]
                         valid[b] = True
+                        flags[b] = (flags[b] & ~ELBOW) | member_flag[0]
     for b in range(q.shape[0]):
         for j in range(6):
             if not math.isfinite(q[b, j]):
@@ -385,11 +387,11 @@ def _elbow_branches(g: NDArray[np.float64], T_home: NDArray[np.float64],
 @jit
 def _member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: float, s1: float,
             q5: float, t: float, reach_side: float, seed: NDArray[np.float64], use_seed: int,
-            seed_length: float, clamp: float, e: int) -> tuple[float, float, float, float,
-                                                               bool, float]:
+            seed_length: float, clamp: float, e: int,
+            out_flag: NDArray[np.int64]) -> tuple[float, float, float, float, bool, float]:
     """Elbow branch e of the solution family at the wrist singularity with q6 = t (moved onto
     the arm's reach if needed): (q2, q3, q4, q6, valid, squared joint distance to the seed over
-    joints 2-4 and 6, revolute differences wrapped)."""
+    joints 2-4 and 6, revolute differences wrapped); out_flag[0]: its ELBOW flag."""
     s5, c5 = sincos(-q5)
     s6, c6 = sincos(-t)
     turns = (c5, s5, c6, s6, c1, s1)
@@ -400,10 +402,11 @@ def _member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: float, s1: 
         s6, c6 = sincos(-t)
         turns = (c5, s5, c6, s6, c1, s1)
         arm = _arm_point(g, T_home, turns)
-    q2, q3, q4, ok, _, _ = _elbow(g, T_home, turns, arm, reach_side, seed[1], use_seed,
-                                  seed_length, clamp, e)
+    q2, q3, q4, ok, elbow_flag, _ = _elbow(g, T_home, turns, arm, reach_side, seed[1],
+                                           use_seed, seed_length, clamp, e)
     distance = (wrap(q2 - seed[1]) ** 2 + wrap(q3 - seed[2]) ** 2 + wrap(q4 - seed[3]) ** 2
                 + wrap(t - seed[5]) ** 2)
+    out_flag[0] = elbow_flag
     return q2, q3, q4, t, ok and math.isfinite(distance), distance
 
 
@@ -412,19 +415,20 @@ def _member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: float, s1: 
 #: members are found at the grid's edge), then golden-section search to MEMBER_PRECISION within
 #: a step of the best grid point. The distance is not smooth (square roots near a stretched or
 #: folded elbow, the move onto the boundary): no derivatives are used.
-MEMBER_HALF_WIDTH = 0.5
+MEMBER_HALF_WIDTH = math.pi
 MEMBER_STEP = 0.05
 MEMBER_PRECISION = 1e-9
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
-#: Grid points on each side of the seed's q6.
-MEMBER_GRID = round(MEMBER_HALF_WIDTH / MEMBER_STEP)
+#: Grid points on each side of the seed's q6 (the whole turn: q2-q4 follow q6, so the nearest
+#: member can be far from the seed's q6).
+MEMBER_GRID = math.ceil(MEMBER_HALF_WIDTH / MEMBER_STEP)
 
 
 @jit
 def _nearest_member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: float,
                     s1: float, q5: float, reach_side: float, seed: NDArray[np.float64],
                     use_seed: int, seed_length: float, clamp: float, e: int,
-                    out: NDArray[np.float64]) -> bool:
+                    out: NDArray[np.float64], out_flag: NDArray[np.int64]) -> bool:
     """At the wrist singularity the pose leaves a one-parameter family (q6 free, q2, q3, q4
     following it): the member nearest the seed in joint space (squared distance over joints
     2-4 and 6), searched over q6 (see MEMBER_*). Writes q2, q3, q4, q6 into out[0:4]; False
@@ -434,7 +438,7 @@ def _nearest_member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: flo
     for k in range(-steps, steps + 1):
         t = seed[5] + k * MEMBER_STEP
         _, _, _, _, ok, distance = _member(g, T_home, c1, s1, q5, t, reach_side, seed,
-                                           use_seed, seed_length, clamp, e)
+                                           use_seed, seed_length, clamp, e, out_flag)
         if ok and distance < best:
             best_t, best = t, distance
     if best == math.inf:
@@ -442,8 +446,10 @@ def _nearest_member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: flo
     low, high = best_t - MEMBER_STEP, best_t + MEMBER_STEP
     a = high - _GOLDEN * (high - low)
     b = low + _GOLDEN * (high - low)
-    fa = _member(g, T_home, c1, s1, q5, a, reach_side, seed, use_seed, seed_length, clamp, e)
-    fb = _member(g, T_home, c1, s1, q5, b, reach_side, seed, use_seed, seed_length, clamp, e)
+    fa = _member(g, T_home, c1, s1, q5, a, reach_side, seed, use_seed, seed_length, clamp, e,
+                 out_flag)
+    fb = _member(g, T_home, c1, s1, q5, b, reach_side, seed, use_seed, seed_length, clamp, e,
+                 out_flag)
     value_a = fa[5] if fa[4] else math.inf
     value_b = fb[5] if fb[4] else math.inf
     while high - low > MEMBER_PRECISION:
@@ -451,19 +457,19 @@ def _nearest_member(g: NDArray[np.float64], T_home: NDArray[np.float64], c1: flo
             high, b, value_b = b, a, value_a
             a = high - _GOLDEN * (high - low)
             fa = _member(g, T_home, c1, s1, q5, a, reach_side, seed, use_seed, seed_length,
-                         clamp, e)
+                         clamp, e, out_flag)
             value_a = fa[5] if fa[4] else math.inf
         else:
             low, a, value_a = a, b, value_b
             b = low + _GOLDEN * (high - low)
             fb = _member(g, T_home, c1, s1, q5, b, reach_side, seed, use_seed, seed_length,
-                         clamp, e)
+                         clamp, e, out_flag)
             value_b = fb[5] if fb[4] else math.inf
     t = 0.5 * (low + high)
     q2, q3, q4, t, ok, distance = _member(g, T_home, c1, s1, q5, t, reach_side, seed, use_seed,
-                                          seed_length, clamp, e)
+                                          seed_length, clamp, e, out_flag)
     if not ok or distance > best:  # the grid point is better (a kink inside the bracket)
         q2, q3, q4, t, ok, distance = _member(g, T_home, c1, s1, q5, best_t, reach_side, seed,
-                                              use_seed, seed_length, clamp, e)
+                                              use_seed, seed_length, clamp, e, out_flag)
     out[0], out[1], out[2], out[3] = q2, q3, q4, t
     return True

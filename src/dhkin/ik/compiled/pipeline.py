@@ -23,9 +23,12 @@ For a target T (4, 4), base_link -> TCP:
    such a copy, and every copy of a branch whose error is within :data:`COPY_MARGIN` of the
    tolerance, is verified again.
 
-``clamp``: reach conditions violated by at most tolerance + the model deviation (metres; 0 for
-an exact-family table) are clamped onto their boundary and verified, not rejected: a pose whose
-joint values verify is never answered empty. ``slack`` = tolerance / lever, lever = max(1 m,
+``clamp``: reach conditions violated by at most tolerance x (1 + lever) + twice the model
+deviation (metres; no deviation for an exact-family table) are clamped onto their boundary,
+polished by Newton (from just off the fold where J is singular on it) and verified, not
+rejected: a point missing the reach by d can still give a pose within the tolerance, trading
+position error for rotation through the wrist (about d / (1 + lever)), so a pose whose joint
+values verify is never answered empty. ``slack`` = tolerance / lever, lever = max(1 m,
 table scale): the largest move of one joint that keeps the pose within the tolerance.
 """
 
@@ -37,12 +40,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.ik.compiled import chain as exact
-from dhkin.ik.compiled.bands import CLAMPED, ELBOW, FREE, MERGE_ANGLE, SHOULDER, WRIST
+from dhkin.ik.compiled.bands import CLAMPED, ELBOW, FLAG_BAND, FREE, MERGE_ANGLE, SHOULDER, WRIST
 from dhkin.ik.compiled.copies import nearest_turn, placed, turn_range, wrap
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.layout import layout
+from dhkin.ik.compiled.offset import GEOMETRY as OG
 from dhkin.ik.compiled.offset import solve_offset_wrist
 from dhkin.ik.compiled.pose import STATUS_BAD_SEED, project, status, to_dh
+from dhkin.ik.compiled.spherical import GEOMETRY as SG
 from dhkin.ik.compiled.spherical import solve_spherical_wrist, solve_stanford
 
 # Family ids.
@@ -133,8 +138,8 @@ def _family(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArray[np.flo
 @jit
 def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np.float64],
             values: NDArray[np.float64], fixed: NDArray[np.bool_], clamped: bool,
-            long_shot: bool, tolerance: float,
-            state: NDArray[np.float64]) -> tuple[float, float]:
+            long_shot: bool, tolerance: float, state: NDArray[np.float64],
+            polish: bool = True) -> tuple[float, float]:
     """Wrap a candidate's revolute values, refine it on the exact chain if the plan says so
     (joints marked ``fixed`` keep their value; a candidate that is an exact solution of the
     ideal model, not ``clamped``, is followed by continuation where Newton fails), or polish it
@@ -151,7 +156,7 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
         if _any(fixed) and not exact.within(position, rotation, tolerance):
             # the exact chain is not singular here (its singular set is shifted, or a
             # calibration leaves none): the seed's choice of the free joint is not exact, so
-            # release it from where it got to
+            # release it from where it got to (the caller sees ``fixed`` cleared)
             for j in range(n):
                 fixed[j] = False
             position, rotation = exact.refine(chain, T, values, fixed, tolerance, budget)
@@ -161,16 +166,30 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
                 values[j] = start[j]
             exact.refine_along(ideal, chain, path, T, values, fixed, tolerance,
                                np.empty_like(chain))
+        elif clamped and not exact.within(position, rotation, tolerance):
+            # a target a hair beyond a fold: its least-squares point may verify
+            exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET, 1.0)
         for j in range(n):
             if chain[j, exact.JOINT.revolute] != 0.0:
                 values[j] = wrap(values[j])
         return exact.check(chain, values, T, state)
     position, rotation = exact.check(chain, values, T, state)
-    if not exact.within(position, rotation, tolerance):
+    if not exact.within(position, rotation, tolerance) and polish:
         # a clamped or near-singular candidate of an exact table: the closed form's point is
         # not the best one the chain reaches; Newton's is, and verification decides (a seeded
-        # candidate keeps its seeded joints: polished, it is still the seed's choice)
+        # candidate keeps its seeded joints; see solve_branches for when it is polished)
         exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET)
+        position, rotation = exact.check(chain, values, T, state)
+        if clamped and not exact.within(position, rotation, tolerance):
+            # clamped onto a fold: J is singular there. A target a hair beyond it: Newton
+            # oscillates along the fold's weak direction, a monotone descent reaches the
+            # least-squares point, which may verify; a target a hair inside it: the roots lie a
+            # hair off the fold
+            exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET, 1.0)
+            position, rotation = exact.check(chain, values, T, state)
+            if not exact.within(position, rotation, tolerance):
+                position, rotation = exact.off_fold(chain, T, values, fixed, tolerance,
+                                                    POLISH_BUDGET)
         for j in range(n):
             if chain[j, exact.JOINT.revolute] != 0.0:
                 values[j] = wrap(values[j])
@@ -247,7 +266,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     near, seeded_flags, seeded_near = uwork[:B], uwork[B:2 * B], uwork[2 * B:3 * B]
     info[INFO.projection] = project(T, projected)
     to_dh(frames, projected, T_dh)
-    clamp = tolerance + plan[PLAN.deviation]
+    clamp = tolerance * (1.0 + plan[PLAN.lever]) + plan[PLAN.deviation]
     _family(plan, g, T_dh, seed, 0, clamp, q, valid, flags, near, why, scratch)
     wanted = 0
     for b in range(B):
@@ -255,9 +274,24 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     if wanted != 0:
         _family(plan, g, T_dh, seed, wanted, clamp, seeded_q, seeded_valid, seeded_flags,
                 seeded_near, seeded_why, scratch)
-    regular = q.copy() if plan[PLAN.refine] != 0.0 else q[:0]
+    regular = q.copy()
+    regular_flags = flags.copy()
     best_position, best_rotation = math.inf, math.inf
     seeded_wrist = bwork[2 * B + n:3 * B + n]
+    released = np.zeros(B, np.bool_)
+    member = np.zeros(B, np.bool_)  # a seeded member that kept the seed's free joint
+    unclamped = np.zeros(B, np.bool_)
+    extra = np.empty((B, n))
+    extra_ok = np.zeros(B, np.bool_)
+    # which seeded candidates verify as computed (wrapped, neither refined nor polished)
+    raw_ok = np.zeros(B, np.bool_)
+    if wanted != 0 and plan[PLAN.refine] == 0.0:
+        for b in range(B):
+            if seeded_valid[b] and (seeded_near[b] & wanted) != 0 and _finite(seeded_q[b]):
+                for j in range(n):
+                    candidate[j] = seeded_q[b, j]
+                position, rotation = exact.check(chain, candidate, T_dh, state)
+                raw_ok[b] = exact.within(position, rotation, tolerance)
     for b in range(B):
         seeded_wrist[b] = False
         tried = False
@@ -267,30 +301,59 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             for j in range(n):
                 candidate[j] = seeded_q[b, j]
             if bits & (SHOULDER | ELBOW):
-                _nearest_member(plan, g, T_dh, seed, bits, b, clamp, candidate, scratch)
+                member_flags = _nearest_member(plan, g, T_dh, seed, bits, b, clamp, candidate,
+                                               scratch)
+                if member_flags >= 0:
+                    seeded_flags[b] = member_flags
             _fix_free(plan, bits, fixed)
+            # polished only when its wrist partner does not verify as computed either: where
+            # the partner does, the pose has picked the partner's side of the singular family
+            # and this candidate's miss is real (polishing would carry it onto the partner's
+            # member and hide the distinct flip, which the regular candidate then gives)
             position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
                                          (seeded_near[b] & CLAMPED) != 0, False, tolerance,
-                                         state)
-            if exact.within(position, rotation, tolerance) and not _in_limits(
-                    chain, limits, candidate, tolerance / plan[PLAN.lever]):
+                                         state, not raw_ok[b ^ 1])
+            released[b] = not _any(fixed)
+            if not released[b] and exact.within(position, rotation, tolerance) and not (
+                    _in_limits(chain, limits, candidate, tolerance / plan[PLAN.lever])):
                 # the seed's member of the family lies outside the joint limits: the nearest
                 # member inside them (the free joint moved off the seed, nearest first)
+                kept = candidate.copy()
                 position, rotation = _member_in_limits(
                     plan, g, chain, limits, T_dh, seed, bits, b, clamp, tolerance, candidate,
                     scratch, fixed, state)
+                if not exact.within(position, rotation, tolerance):
+                    # none inside: the seed's member stands (the limits drop it later), not
+                    # the regular candidates, which are other members of the same family
+                    for j in range(n):
+                        candidate[j] = kept[j]
+                    position, rotation = exact.check(chain, candidate, T_dh, state)
             if exact.within(position, rotation, tolerance):
                 for j in range(n):
                     q[b, j] = candidate[j]
                 ok[b] = True
                 flags[b] = seeded_flags[b] | bits
                 seeded_wrist[b] = (bits & WRIST) != 0
+                member[b] = _any(fixed)
                 errors[b, 0], errors[b, 1] = position, rotation
             else:
                 best_position = min(best_position, position)
                 best_rotation = min(best_rotation, rotation)
         long_shot = (not valid[b] and plan[PLAN.refine] != 0.0 and _finite(q[b])
                      and (near[b] & CLAMPED) != 0)
+        if ok[b] and released[b] and valid[b] and plan[PLAN.refine] != 0.0:
+            # the seeded candidate verified only with its free joint released: the exact chain
+            # is not singular here, and the regular candidate may reach another root of the
+            # pose (kept as an extra; the seeded root, the one nearest the seed, stays)
+            for j in range(n):
+                candidate[j] = regular[b, j]
+                fixed[j] = False
+            position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+                                         (near[b] & CLAMPED) != 0, False, tolerance, state)
+            if exact.within(position, rotation, tolerance):
+                for j in range(n):
+                    extra[b, j] = candidate[j]
+                extra_ok[b] = True
         if not ok[b] and (valid[b] or long_shot):
             tried = tried or valid[b]
             for j in range(n):
@@ -307,36 +370,80 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             else:
                 best_position = min(best_position, position)
                 best_rotation = min(best_rotation, rotation)
+
         if tried:
             info[INFO.candidates] += 1
-            unclamped = (valid[b] and (near[b] & CLAMPED) == 0) or (
+            unclamped[b] = (valid[b] and (near[b] & CLAMPED) == 0) or (
                 bits != 0 and seeded_valid[b] and (seeded_near[b] & CLAMPED) == 0)
-            if not ok[b] and unclamped:  # a solution of the ideal model that did not settle
-                info[INFO.dropped] += 1
-    # the two wrist branches of an arm branch that both took the seed's wrist: one solution
-    # (on a refined table the seeded candidates were refined; duplicates merge below)
+    # the two wrist branches of an arm branch that both took the seed's wrist and landed on the
+    # same member of the family (they differ by 2 |q5| <= 2 FLAG_BAND): one solution (on a
+    # refined table the seeded candidates were refined; duplicates merge below)
     for b in range(0, B, 2):
         if (plan[PLAN.refine] == 0.0 and ok[b] and ok[b + 1] and seeded_wrist[b]
-                and seeded_wrist[b + 1]):
-            worse = b + 1 if _size(errors, b) <= _size(errors, b + 1) else b
-            ok[worse] = False
+                and seeded_wrist[b + 1] and _same(chain, q[b], q[b + 1], 4.0 * FLAG_BAND)):
+            better = b if _size(errors, b) <= _size(errors, b + 1) else b + 1
+            worse = b + b + 1 - better
+            if _family_free(plan, g, chain, T_dh, q[better], better, clamp, tolerance,
+                            scratch, state):
+                ok[worse] = False  # one family at the tolerance: one solution
+            else:
+                # singular to within the seed band but not to within the tolerance over half a
+                # turn of the family: the flip is a distinct solution, the regular candidate's
+                for j in range(n):
+                    candidate[j] = regular[worse, j]
+                    fixed[j] = False
+                ok[worse] = False
+                if valid[worse]:
+                    position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+                                                 (near[worse] & CLAMPED) != 0, False,
+                                                 tolerance, state)
+                    if (exact.within(position, rotation, tolerance)
+                            and not _known(chain, q, ok, candidate)):
+                        for j in range(n):
+                            q[worse, j] = candidate[j]
+                        ok[worse] = True
+                        flags[worse] = regular_flags[worse]
+                        errors[worse, 0], errors[worse, 1] = position, rotation
+    _merge_duplicates(chain, T_dh, q, ok, errors, tolerance, member)
+    # a second root found by a branch goes to its own slot when a merge emptied that (its
+    # seeded root was another branch's), else to its wrist twin's when that has none
+    for b in range(B):
+        if not extra_ok[b] or _known(chain, q, ok, extra[b]):
+            continue
+        slot = b if not ok[b] else (b ^ 1 if not ok[b ^ 1] else -1)
+        if slot >= 0:
+            for j in range(n):
+                q[slot, j] = extra[b, j]
+            ok[slot] = True
+            flags[slot] = regular_flags[b]
+            errors[slot, 0], errors[slot, 1] = exact.check(chain, q[slot], T_dh, state)
     if plan[PLAN.refine] != 0.0:
-        _merge_duplicates(chain, T_dh, q, ok, errors, tolerance)
         _retry_corrected(plan, g, chain, T_dh, seed, clamp, tolerance, regular, valid, near, q,
                          ok, errors, flags, scratch)
+    # flags describe the solution returned: wrist and elbow from its joint values, shoulder
+    # from the pose (where the two q1 roots meet depends on the pose alone)
+    for b in range(B):
+        if ok[b]:
+            flags[b] = (regular_flags[b] & SHOULDER) | _value_flags(plan, g, q[b])
     for b in range(B):
         if ok[b]:
             info[INFO.verified] += 1
+        # dropped: a solution of the ideal model (not a clamped start) that did not settle, on
+        # a wrist pair that answered nothing (one answer for a singular pair is by design)
+        elif unclamped[b] and not ok[b ^ 1]:
+            info[INFO.dropped] += 1
     info[INFO.best_position], info[INFO.best_rotation] = best_position, best_rotation
 
 
-#: The nearest member of a one-parameter family (q1 or q2 free): a grid of this half-width and
-#: step (rad) around the seed's value of the free joint, then golden-section search to
+#: The nearest member of a one-parameter family (q1 or q2 free): a grid over the whole turn
+#: (this half-width, this step, rad) around the seed's value of the free joint: the other joints
+#: follow the free one, so the nearest member can be far from the seed's value of it; then
+#: golden-section search to
 #: MEMBER_PRECISION within a step of the best grid point (the distance has kinks: no
 #: derivatives).
-MEMBER_HALF_WIDTH = 0.5
+MEMBER_HALF_WIDTH = math.pi
 MEMBER_STEP = 0.05
-MEMBER_GRID = round(MEMBER_HALF_WIDTH / MEMBER_STEP)
+MEMBER_GRID = math.ceil(MEMBER_HALF_WIDTH / MEMBER_STEP)
 MEMBER_PRECISION = 1e-9
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
@@ -367,10 +474,11 @@ def _member_distance(plan: NDArray[np.float64], g: NDArray[np.float64],
 @jit
 def _nearest_member(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArray[np.float64],
                     seed: NDArray[np.float64], bits: int, b: int, clamp: float,
-                    candidate: NDArray[np.float64], scratch: NDArray[np.float64]) -> None:
+                    candidate: NDArray[np.float64], scratch: NDArray[np.float64]) -> int:
     """Where the pose leaves q1 (SHOULDER) or q2 (ELBOW) free: branch b's member of the family
     nearest the seed over all joints (the other joints follow the free one: near a second
-    singularity they follow it fast), into ``candidate`` (left as it is when none is nearer)."""
+    singularity they follow it fast), into ``candidate`` (left as it is when none is nearer);
+    returns the member's flags (-1 when none)."""
     n = seed.shape[0]
     free = int(plan[PLAN.free_shoulder]) if bits & SHOULDER else int(plan[PLAN.free_elbow])
     q = np.empty((BRANCHES, n))
@@ -387,7 +495,7 @@ def _nearest_member(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArra
         if value < best:
             best_t, best = t, value
     if best == math.inf:
-        return
+        return -1
     low, high = best_t - MEMBER_STEP, best_t + MEMBER_STEP
     a = high - _GOLDEN * (high - low)
     c = low + _GOLDEN * (high - low)
@@ -413,6 +521,7 @@ def _nearest_member(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArra
                          flags, near, why, scratch)
     for j in range(n):
         candidate[j] = q[b, j]
+    return int(flags[b])
 
 
 #: Moves (rad or m) of a free joint off the seed tried, nearest first, when the seed's member of
@@ -476,10 +585,13 @@ def _size(errors: NDArray[np.float64], b: int) -> float:
 @jit
 def _merge_duplicates(chain: NDArray[np.float64], T: NDArray[np.float64],
                       q: NDArray[np.float64], ok: NDArray[np.bool_],
-                      errors: NDArray[np.float64], tolerance: float) -> None:
-    """Branches of a refined table that converged to one solution: the second looks for the
-    twin root it lost (:func:`.chain.find_twin`) and keeps it when that is a new solution; else
-    it is merged into the first."""
+                      errors: NDArray[np.float64], tolerance: float,
+                      member: NDArray[np.bool_]) -> None:
+    """Branches that answered with one solution (a refined table's two starts converging to one
+    root; polished clamps of an exact table at a fold; members of one singular family): the
+    second looks for the twin root it lost (:func:`.chain.find_twin`) and keeps it when that is
+    a new solution; else it is merged into the first. Not for a ``member`` of a singular family
+    (it held the seed's free joint): every neighbour of it on the family would pass for a twin."""
     B, n = q.shape
     twin = np.empty(n)
     state = np.empty(12)
@@ -497,7 +609,8 @@ def _merge_duplicates(chain: NDArray[np.float64], T: NDArray[np.float64],
                 same = same and abs(difference) <= 2.0 * MERGE_ANGLE
             if same:
                 ok[b] = False
-                if exact.find_twin(chain, T, q[a], tolerance, 2.0 * MERGE_ANGLE, q, ok, twin):
+                if not (member[a] or member[b]) and exact.find_twin(
+                        chain, T, q[a], tolerance, 2.0 * MERGE_ANGLE, q, ok, twin):
                     ok[b] = True
                     for j in range(n):
                         q[b, j] = wrap(twin[j]) if chain[j, exact.JOINT.revolute] else twin[j]
@@ -586,6 +699,68 @@ def _corrected_target(ideal: NDArray[np.float64], chain: NDArray[np.float64],
     for r in range(3):
         for c in range(4):
             out[r, c] = result[r, c]
+
+
+@jit
+def _value_flags(plan: NDArray[np.float64], g: NDArray[np.float64],
+                 q: NDArray[np.float64]) -> int:
+    """The WRIST and ELBOW flags of joint values q: each singularity's measure (|sin| of the
+    wrist angle, of the elbow angle; the slide's distance from its merge over the scale) at most
+    FLAG_BAND, computed from q itself (family geometry of the ideal model)."""
+    family = int(plan[PLAN.family])
+    bits = 0
+    if family == OFFSET_WRIST:
+        if abs(math.sin(q[4] - g[OG.psi])) <= FLAG_BAND:
+            bits |= WRIST
+        if abs(math.sin(q[2] - g[OG.elbow_base])) <= FLAG_BAND:
+            bits |= ELBOW
+        return bits
+    d5 = g[SG.wrist_directions + 1]
+    if abs(math.sin(d5 * q[4] + g[SG.tilt])) <= FLAG_BAND:
+        bits |= WRIST
+    s3 = g[SG.signs + 2]
+    if family == SPHERICAL_WRIST:
+        if abs(math.sin(s3 * q[2] + g[SG.bend_at_zero])) <= FLAG_BAND:
+            bits |= ELBOW
+    elif abs(s3 * q[2] + g[SG.slide_along]) <= FLAG_BAND * g[SG.scale]:
+        bits |= ELBOW
+    return bits
+
+
+@jit
+def _family_free(plan: NDArray[np.float64], g: NDArray[np.float64],
+                 chain: NDArray[np.float64], T: NDArray[np.float64],
+                 solution: NDArray[np.float64], b: int, clamp: float, tolerance: float,
+                 scratch: NDArray[np.float64], state: NDArray[np.float64]) -> bool:
+    """Whether the pose leaves the wrist free at the tolerance: branch b's seeded member half a
+    turn along the family from ``solution`` (the seed moved by pi on joints 4 and 6) verifies."""
+    n = solution.shape[0]
+    moved = solution.copy()
+    moved[3] += math.pi
+    moved[5] += math.pi
+    q = np.empty((BRANCHES, n))
+    valid = np.empty(BRANCHES, np.bool_)
+    flags = np.empty(BRANCHES, np.uint8)
+    near = np.empty(BRANCHES, np.uint8)
+    why = np.empty(WHY_SIZE)
+    _family(plan, g, T, moved, WRIST, clamp, q, valid, flags, near, why, scratch)
+    if not valid[b] or (near[b] & WRIST) == 0:
+        return False
+    position, rotation = exact.check(chain, q[b], T, state)
+    return exact.within(position, rotation, tolerance)
+
+
+@jit
+def _same(chain: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64],
+          distance: float) -> bool:
+    """Whether a and b differ by at most ``distance`` on every joint (mod 2pi)."""
+    for j in range(a.shape[0]):
+        difference = a[j] - b[j]
+        if chain[j, exact.JOINT.revolute] != 0.0:
+            difference = wrap(difference)
+        if abs(difference) > distance:
+            return False
+    return True
 
 
 @jit

@@ -691,8 +691,12 @@ def test_tables_inside_the_band_fit_and_are_exact(changes):
     assert every.valid.any(axis=1).all()  # every pose (their q verifies) has an answer
 
 
-@pytest.mark.parametrize("changes", INSIDE_THE_BAND.values(), ids=INSIDE_THE_BAND.keys())
-def test_tables_inside_the_band_are_complete(changes):
+#: Poses (of 2000) whose original q the IK misses, measured: only the a5 = 1.9 mm table.
+KNOWN_MISSING = {"a5 = 1.9 mm": 3}
+
+
+@pytest.mark.parametrize("name", INSIDE_THE_BAND)
+def test_tables_inside_the_band_are_complete(name):
     """The original q of each of 2000 random poses is among the solutions (1e-6). (Dropped
     candidates are printed, not failed: near the ideal model's wrist singularity two of its
     roots can have no counterpart on the exact chain, e.g. alpha4 0.019 rad off, pose 1078:
@@ -700,10 +704,12 @@ def test_tables_inside_the_band_are_complete(changes):
 
     KNOWN GAP (reported): the exact chain can have roots the ideal model has not. Near q5 = 0 a
     wrist with a5 = 1.9 mm has up to four roots where the spherical wrist has two, and near the
-    shoulder singularity q1 splits likewise; refinement starts at the ideal model's eight
-    branches and misses the rest (general 6R, a later issue). Measured on these 2000 poses: 4
-    missed for a5 = 1.9 mm, none for the other tables; bounded at 0.25 % so a change shows."""
-    table = _irb_with(**changes)
+    shoulder singularity q1 splits likewise; the eight branch slots hold eight of them (a root
+    found by a branch whose slot is taken fills an empty one) and the rest are not returned
+    (general 6R, a later issue). Measured on these 2000 poses: 3 missed for a5 = 1.9 mm (poses
+    196, 949, 1844: eight other roots returned), none for the other tables; bounded by that
+    count so a regression shows."""
+    table = _irb_with(**INSIDE_THE_BAND[name])
     robot = dhkin.Robot(table)
     rng = np.random.default_rng(7)
     q = table.random_q(2000, rng)
@@ -711,9 +717,9 @@ def test_tables_inside_the_band_are_complete(changes):
     every = robot.ik_batch_detailed(T, copies=True)
     gap = completeness_gap(every.q, every.valid, q)
     missing = np.flatnonzero(gap > COMPLETENESS_TOLERANCE)
-    print(f"\nIRB 1200 with {changes}: original q missing for {missing.size} of {len(q)} poses, "
+    print(f"\nIRB 1200 with {name}: original q missing for {missing.size} of {len(q)} poses, "
           f"{every.dropped.sum()} candidates dropped")
-    assert missing.size <= len(q) // 400, (
+    assert missing.size <= KNOWN_MISSING.get(name, 0), (
         f"original q missing for {missing.size} of {len(q)} poses, e.g. q = "
         f"{q[missing[0]].tolist()} (gap {gap[missing[0]]:.3g}); returned "
         f"{every.q[missing[0]][every.valid[missing[0]]].tolist()}")

@@ -404,22 +404,17 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
                         ok[worse] = True
                         flags[worse] = regular_flags[worse]
                         errors[worse, 0], errors[worse, 1] = position, rotation
-    _merge_duplicates(chain, T_dh, q, ok, errors, tolerance, member)
+    _merge_duplicates(chain, T_dh, seed, q, ok, errors, tolerance, member)
     # a second root found by a branch goes to its own slot when a merge emptied that (its
     # seeded root was another branch's), else to its wrist twin's when that has none
-    for b in range(B):
-        if not extra_ok[b] or _known(chain, q, ok, extra[b]):
-            continue
-        slot = b if not ok[b] else (b ^ 1 if not ok[b ^ 1] else -1)
-        if slot >= 0:
-            for j in range(n):
-                q[slot, j] = extra[b, j]
-            ok[slot] = True
-            flags[slot] = regular_flags[b]
-            errors[slot, 0], errors[slot, 1] = exact.check(chain, q[slot], T_dh, state)
+    _place_extras(chain, T_dh, extra, extra_ok, regular_flags, q, ok, flags, errors, 2)
     if plan[PLAN.refine] != 0.0:
         _retry_corrected(plan, g, chain, T_dh, seed, clamp, tolerance, regular, valid, near, q,
                          ok, errors, flags, scratch)
+        # a root still without a slot takes the nearest empty one (elbow, then shoulder
+        # partners): near a singularity the exact chain can have more roots for one ideal
+        # branch than the ideal model has, while another branch's candidates found none
+        _place_extras(chain, T_dh, extra, extra_ok, regular_flags, q, ok, flags, errors, B)
     # flags describe the solution returned: wrist and elbow from its joint values, shoulder
     # from the pose (where the two q1 roots meet depends on the pose alone)
     for b in range(B):
@@ -462,12 +457,7 @@ def _member_distance(plan: NDArray[np.float64], g: NDArray[np.float64],
     if not valid[b] or (near[b] & bits) != bits:
         return math.inf
     _, chain, _ = plan_parts(plan)
-    total = 0.0
-    for j in range(seed.shape[0]):
-        difference = q[b, j] - seed[j]
-        if chain[j, exact.JOINT.revolute] != 0.0:
-            difference = wrap(difference)
-        total += difference * difference
+    total = _seed_distance(chain, q[b], seed)
     return total if math.isfinite(total) else math.inf
 
 
@@ -583,15 +573,55 @@ def _size(errors: NDArray[np.float64], b: int) -> float:
 
 
 @jit
+def _place_extras(chain: NDArray[np.float64], T: NDArray[np.float64],
+                  extra: NDArray[np.float64], extra_ok: NDArray[np.bool_],
+                  extra_flags: NDArray[np.uint8], q: NDArray[np.float64],
+                  ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+                  errors: NDArray[np.float64], reach: int) -> None:
+    """Each verified extra root (extra_ok) that no slot holds yet goes to the first empty slot
+    among b ^ 0, b ^ 1, ..., b ^ (reach - 1) (own, wrist twin, elbow pair, shoulder partners)."""
+    B, n = q.shape
+    state = np.empty(12)
+    for b in range(B):
+        if not extra_ok[b] or _known(chain, q, ok, extra[b]):
+            continue
+        for k in range(reach):
+            slot = b ^ k
+            if not ok[slot]:
+                for j in range(n):
+                    q[slot, j] = extra[b, j]
+                ok[slot] = True
+                flags[slot] = extra_flags[b]
+                errors[slot, 0], errors[slot, 1] = exact.check(chain, q[slot], T, state)
+                break
+
+
+@jit
+def _seed_distance(chain: NDArray[np.float64], values: NDArray[np.float64],
+                   seed: NDArray[np.float64]) -> float:
+    """Squared joint distance from the seed, revolute differences wrapped."""
+    total = 0.0
+    for j in range(seed.shape[0]):
+        difference = values[j] - seed[j]
+        if chain[j, exact.JOINT.revolute] != 0.0:
+            difference = wrap(difference)
+        total += difference * difference
+    return total
+
+
+@jit
 def _merge_duplicates(chain: NDArray[np.float64], T: NDArray[np.float64],
-                      q: NDArray[np.float64], ok: NDArray[np.bool_],
+                      seed: NDArray[np.float64], q: NDArray[np.float64], ok: NDArray[np.bool_],
                       errors: NDArray[np.float64], tolerance: float,
                       member: NDArray[np.bool_]) -> None:
     """Branches that answered with one solution (a refined table's two starts converging to one
     root; polished clamps of an exact table at a fold; members of one singular family): the
     second looks for the twin root it lost (:func:`.chain.find_twin`) and keeps it when that is
-    a new solution; else it is merged into the first. Not for a ``member`` of a singular family
-    (it held the seed's free joint): every neighbour of it on the family would pass for a twin."""
+    a new solution; else it is merged into the first, which keeps whichever of the two lies
+    nearer the seed (both verified: at a fold the pose fixes the joints only to ~sqrt(tolerance),
+    and the answer is the one nearest the seed). No twin search for a ``member`` of a singular
+    family (it held the seed's free joint): every neighbour of it on the family would pass for
+    a twin."""
     B, n = q.shape
     twin = np.empty(n)
     state = np.empty(12)
@@ -617,7 +647,7 @@ def _merge_duplicates(chain: NDArray[np.float64], T: NDArray[np.float64],
                     errors[b, 0], errors[b, 1] = exact.check(chain, q[b], T, state)
                     continue
                 ok[b] = False
-                if _size(errors, b) < _size(errors, a):
+                if _seed_distance(chain, q[b], seed) < _seed_distance(chain, q[a], seed):
                     for j in range(n):
                         q[a, j] = q[b, j]
                     errors[a, 0], errors[a, 1] = errors[b, 0], errors[b, 1]

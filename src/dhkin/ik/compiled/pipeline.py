@@ -159,7 +159,16 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
             # release it from where it got to (the caller sees ``fixed`` cleared)
             for j in range(n):
                 fixed[j] = False
-            position, rotation = exact.refine(chain, T, values, fixed, tolerance, budget)
+            # a monotone descent first: it stays in the basin of the root nearest the seed's
+            # member, where Newton's first step can jump along the near-singular direction to
+            # a far root (an exact chain a hair from a spherical wrist has a root at q5 ~ 0
+            # beside the two the ideal model gives)
+            held = values.copy()
+            position, rotation = exact.refine(chain, T, values, fixed, tolerance, budget, 1.0)
+            if not exact.within(position, rotation, tolerance):
+                for j in range(n):
+                    values[j] = held[j]
+                position, rotation = exact.refine(chain, T, values, fixed, tolerance, budget)
         if not clamped and not exact.within(position, rotation, tolerance):  # follow the branch
             ideal, path = model_path(plan)
             for j in range(n):
@@ -415,6 +424,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
         # partners): near a singularity the exact chain can have more roots for one ideal
         # branch than the ideal model has, while another branch's candidates found none
         _place_extras(chain, T_dh, extra, extra_ok, regular_flags, q, ok, flags, errors, B)
+        _seed_root(plan, chain, T_dh, seed, tolerance, q, ok, errors)
     # flags describe the solution returned: wrist and elbow from its joint values, shoulder
     # from the pose (where the two q1 roots meet depends on the pose alone)
     for b in range(B):
@@ -453,7 +463,8 @@ def _member_distance(plan: NDArray[np.float64], g: NDArray[np.float64],
     """Squared joint distance (revolute differences wrapped) from the seed of branch b's member
     with the free joint at t; inf where the branch has no such member."""
     moved[free] = t
-    _family(plan, g, T, moved, bits, clamp, q, valid, flags, near, why, scratch)
+    # a member that also passes the wrist singularity takes the seed's wrist split there
+    _family(plan, g, T, moved, bits | WRIST, clamp, q, valid, flags, near, why, scratch)
     if not valid[b] or (near[b] & bits) != bits:
         return math.inf
     _, chain, _ = plan_parts(plan)
@@ -570,6 +581,57 @@ def _member_in_limits(plan: NDArray[np.float64], g: NDArray[np.float64],
 @jit
 def _size(errors: NDArray[np.float64], b: int) -> float:
     return max(errors[b, 0], errors[b, 1])
+
+
+@jit
+def _seed_root(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np.float64],
+               seed: NDArray[np.float64], tolerance: float, q: NDArray[np.float64],
+               ok: NDArray[np.bool_], errors: NDArray[np.float64]) -> None:
+    """A refined table's seed within one maximal Newton step of the pose (rotation error at
+    most MAX_JOINT_STEP, position error at most that times the lever) is a start as good as
+    the ideal model's closed form, which is up to the family band off the exact chain: a
+    monotone descent from it finds the root in its basin. Near a
+    singularity the exact chain can have roots the ideal model has not (a wrist 0.175 mm from
+    spherical: one at q5 ~ 0 beside the two at q5 ~ +-0.03); such a root, when it is nearer
+    the seed than the solution of the branch it lies nearest, takes that branch's slot (its
+    solution moves to the nearest empty slot, if any)."""
+    B, n = q.shape
+    state = np.empty(12)
+    position, rotation = exact.check(chain, seed, T, state)
+    if rotation > exact.MAX_JOINT_STEP or position > exact.MAX_JOINT_STEP * plan[PLAN.lever]:
+        return
+    root = seed.copy()
+    fixed = np.zeros(n, np.bool_)
+    position, rotation = exact.refine(chain, T, root, fixed, tolerance, 4 * exact.MAX_STEPS, 1.0)
+    if not exact.within(position, rotation, tolerance):
+        return
+    for j in range(n):
+        if chain[j, exact.JOINT.revolute] != 0.0:
+            root[j] = wrap(root[j])
+    if _known(chain, q, ok, root):
+        return
+    slot, nearest = -1, math.inf
+    for b in range(B):
+        if ok[b]:
+            distance = _seed_distance(chain, q[b], root)
+            if distance < nearest:
+                slot, nearest = b, distance
+    if slot < 0:
+        slot = 0
+    elif _seed_distance(chain, root, seed) >= _seed_distance(chain, q[slot], seed):
+        return
+    else:
+        for k in range(1, B):  # the displaced solution to the nearest empty slot
+            if not ok[slot ^ k]:
+                for j in range(n):
+                    q[slot ^ k, j] = q[slot, j]
+                ok[slot ^ k] = True
+                errors[slot ^ k, 0], errors[slot ^ k, 1] = errors[slot, 0], errors[slot, 1]
+                break
+    for j in range(n):
+        q[slot, j] = root[j]
+    ok[slot] = True
+    errors[slot, 0], errors[slot, 1] = position, rotation
 
 
 @jit

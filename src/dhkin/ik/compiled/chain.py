@@ -369,7 +369,7 @@ CONTINUATION_DEPTH = 5
 
 
 @jit
-def _rodrigues(w0: float, w1: float, w2: float, R: NDArray[np.float64]) -> None:
+def rodrigues(w0: float, w1: float, w2: float, R: NDArray[np.float64]) -> None:
     """R (3, 3) = the rotation by the rotation vector w."""
     angle = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     s, c = sincos(angle)
@@ -391,6 +391,28 @@ def _rodrigues(w0: float, w1: float, w2: float, R: NDArray[np.float64]) -> None:
 
 
 @jit
+def extend_tail(chain: NDArray[np.float64], point: NDArray[np.float64]) -> None:
+    """In place: the chain's tail frame P_tail followed by the translation ``point`` (in DH
+    frame n), so that the chain's FK ends at that point (its errors are measured there)."""
+    n = chain.shape[0] - 1
+    for r in range(3):
+        chain[n, 4 * r + 3] += (chain[n, 4 * r] * point[0] + chain[n, 4 * r + 1] * point[1]
+                                + chain[n, 4 * r + 2] * point[2])
+
+
+@jit
+def extend_path(path: NDArray[np.float64], point: NDArray[np.float64]) -> None:
+    """In place: the continuation path (:func:`interpolate`) between two chains whose tails
+    were both extended by ``point``: row n's step [Rot(w), v] becomes
+    Tr(-point) [Rot(w), v] Tr(point) = [Rot(w), v + Rot(w) point - point]."""
+    n = path.shape[0] - 1
+    R = np.empty((3, 3))
+    rodrigues(path[n, 0], path[n, 1], path[n, 2], R)
+    for r in range(3):
+        path[n, 3 + r] += R[r, 0] * point[0] + R[r, 1] * point[1] + R[r, 2] * point[2] - point[r]
+
+
+@jit
 def interpolate(ideal: NDArray[np.float64], path: NDArray[np.float64], t: float,
                 out: NDArray[np.float64]) -> None:
     """out = the chain at t in [0, 1] on the path from ``ideal`` to the exact chain: each
@@ -400,7 +422,7 @@ def interpolate(ideal: NDArray[np.float64], path: NDArray[np.float64], t: float,
     for j in range(ideal.shape[0]):
         for k in range(ideal.shape[1]):
             out[j, k] = ideal[j, k]
-        _rodrigues(t * path[j, 0], t * path[j, 1], t * path[j, 2], R)
+        rodrigues(t * path[j, 0], t * path[j, 1], t * path[j, 2], R)
         step = np.empty(12)
         for r in range(3):
             for c in range(3):

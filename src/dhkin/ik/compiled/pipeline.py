@@ -46,7 +46,7 @@ from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.layout import layout
 from dhkin.ik.compiled.offset import GEOMETRY as OG
 from dhkin.ik.compiled.offset import solve_offset_wrist
-from dhkin.ik.compiled.pose import STATUS_BAD_SEED, project, status, to_dh
+from dhkin.ik.compiled.pose import STATUS_BAD_SEED, at_point, project, status, tcp_point, to_dh
 from dhkin.ik.compiled.spherical import GEOMETRY as SG
 from dhkin.ik.compiled.spherical import solve_spherical_wrist, solve_stanford
 
@@ -59,6 +59,12 @@ BRANCHES = 8
 #: joints. Copies of a branch whose error is within this margin of the tolerance (500 times that
 #: bound) are verified themselves.
 COPY_MARGIN = 1e-11
+#: Two double-precision evaluations of one chain's FK (ours, Pinocchio's on the URDF) differ by
+#: rounding: at most 1.4e-15 (m per m of arm, rad) on the built-in tables ("fk vs pin" of
+#: ``dhkin check``). Solutions are verified here at the tolerance less FK_ROUNDING x lever (64 ulp
+#: per metre, ~10x that bound; at most half the tolerance), so that a solution verified on our
+#: FK is also within the tolerance on the oracle's.
+FK_ROUNDING = 64.0 * 2.220446049250313e-16
 
 #: Chain evaluations allowed to the refinement of a *long shot*: on a refined table, a branch
 #: that the ideal model cannot reach even within the clamp band is still tried from its clamped
@@ -97,6 +103,13 @@ WHY_SIZE = 6
 
 
 @jit
+def verification_tolerance(plan: NDArray[np.float64], tolerance: float) -> float:
+    """The tolerance the pipeline verifies at: ``tolerance`` less the FK rounding margin
+    (:data:`FK_ROUNDING`)."""
+    return max(tolerance - FK_ROUNDING * plan[PLAN.lever], 0.5 * tolerance)
+
+
+@jit
 def model_path(plan: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(ideal chain (n + 1, ROW), path (n + 1, 6)) views into a plan: the continuation from
     the ideal model to the exact chain (:func:`.chain.refine_along`)."""
@@ -115,6 +128,23 @@ def plan_parts(plan: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[
     c_at, l_at = int(plan[PLAN.chain_at]), int(plan[PLAN.limits_at])
     chain = plan[c_at:c_at + (n + 1) * exact.ROW].reshape(n + 1, exact.ROW)
     return plan[g_at:g_at + g_size], chain, plan[l_at:l_at + 2 * n].reshape(n, 2)
+
+
+@jit
+def plan_at_tcp(plan: NDArray[np.float64], point: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The plan whose exact and ideal chains (and the path between them) end at ``point``, the
+    TCP's origin in DH frame n (:func:`.pose.tcp_point`): errors are then the TCP's, which
+    differ from DH frame n's by up to the rotation error times |point|. The plan itself when
+    the point is DH frame n's origin."""
+    if point[0] == 0.0 and point[1] == 0.0 and point[2] == 0.0:
+        return plan
+    out = plan.copy()
+    _, chain, _ = plan_parts(out)
+    ideal, path = model_path(out)
+    exact.extend_tail(chain, point)
+    exact.extend_tail(ideal, point)
+    exact.extend_path(path, point)
+    return out
 
 
 @jit
@@ -241,6 +271,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     :func:`work_sizes`."""
     n = seed.shape[0]
     B = BRANCHES
+    tolerance = verification_tolerance(plan, tolerance)
     for k in range(INFO.size):
         info[k] = 0.0
     for k in range(why.shape[0]):
@@ -256,12 +287,15 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
         if not math.isfinite(seed[j]):
             info[INFO.status] = STATUS_BAD_SEED
             return
-    g, chain, limits = plan_parts(plan)
     at = 0
     projected = fwork[at:at + 12].reshape(3, 4)
     at += 12
     T_dh = fwork[at:at + 12].reshape(3, 4)
     at += 12
+    T_at = fwork[at:at + 12].reshape(3, 4)  # the target of the TCP point (see plan_at_tcp)
+    at += 12
+    point = fwork[at:at + 3]
+    at += 3
     state = fwork[at:at + 12]
     at += 12
     scratch = fwork[at:at + 16]
@@ -275,6 +309,10 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     near, seeded_flags, seeded_near = uwork[:B], uwork[B:2 * B], uwork[2 * B:3 * B]
     info[INFO.projection] = project(T, projected)
     to_dh(frames, projected, T_dh)
+    tcp_point(frames, point)
+    at_point(T_dh, point, T_at)
+    plan = plan_at_tcp(plan, point)
+    g, chain, limits = plan_parts(plan)
     clamp = tolerance * (1.0 + plan[PLAN.lever]) + plan[PLAN.deviation]
     _family(plan, g, T_dh, seed, 0, clamp, q, valid, flags, near, why, scratch)
     wanted = 0
@@ -299,7 +337,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             if seeded_valid[b] and (seeded_near[b] & wanted) != 0 and _finite(seeded_q[b]):
                 for j in range(n):
                     candidate[j] = seeded_q[b, j]
-                position, rotation = exact.check(chain, candidate, T_dh, state)
+                position, rotation = exact.check(chain, candidate, T_at, state)
                 raw_ok[b] = exact.within(position, rotation, tolerance)
     for b in range(B):
         seeded_wrist[b] = False
@@ -319,7 +357,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             # the partner does, the pose has picked the partner's side of the singular family
             # and this candidate's miss is real (polishing would carry it onto the partner's
             # member and hide the distinct flip, which the regular candidate then gives)
-            position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+            position, rotation = _settle(plan, chain, T_at, candidate, fixed,
                                          (seeded_near[b] & CLAMPED) != 0, False, tolerance,
                                          state, not raw_ok[b ^ 1])
             released[b] = not _any(fixed)
@@ -329,14 +367,14 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
                 # member inside them (the free joint moved off the seed, nearest first)
                 kept = candidate.copy()
                 position, rotation = _member_in_limits(
-                    plan, g, chain, limits, T_dh, seed, bits, b, clamp, tolerance, candidate,
+                    plan, g, chain, limits, T_dh, T_at, seed, bits, b, clamp, tolerance, candidate,
                     scratch, fixed, state)
                 if not exact.within(position, rotation, tolerance):
                     # none inside: the seed's member stands (the limits drop it later), not
                     # the regular candidates, which are other members of the same family
                     for j in range(n):
                         candidate[j] = kept[j]
-                    position, rotation = exact.check(chain, candidate, T_dh, state)
+                    position, rotation = exact.check(chain, candidate, T_at, state)
             if exact.within(position, rotation, tolerance):
                 for j in range(n):
                     q[b, j] = candidate[j]
@@ -357,7 +395,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             for j in range(n):
                 candidate[j] = regular[b, j]
                 fixed[j] = False
-            position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+            position, rotation = _settle(plan, chain, T_at, candidate, fixed,
                                          (near[b] & CLAMPED) != 0, False, tolerance, state)
             if exact.within(position, rotation, tolerance):
                 for j in range(n):
@@ -368,7 +406,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             for j in range(n):
                 candidate[j] = q[b, j]
                 fixed[j] = False
-            position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+            position, rotation = _settle(plan, chain, T_at, candidate, fixed,
                                          (near[b] & CLAMPED) != 0, long_shot, tolerance, state)
             if exact.within(position, rotation, tolerance):
                 tried = True
@@ -392,7 +430,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
                 and seeded_wrist[b + 1] and _same(chain, q[b], q[b + 1], 4.0 * FLAG_BAND)):
             better = b if _size(errors, b) <= _size(errors, b + 1) else b + 1
             worse = b + b + 1 - better
-            if _family_free(plan, g, chain, T_dh, q[better], better, clamp, tolerance,
+            if _family_free(plan, g, chain, T_dh, T_at, q[better], better, clamp, tolerance,
                             scratch, state):
                 ok[worse] = False  # one family at the tolerance: one solution
             else:
@@ -403,7 +441,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
                     fixed[j] = False
                 ok[worse] = False
                 if valid[worse]:
-                    position, rotation = _settle(plan, chain, T_dh, candidate, fixed,
+                    position, rotation = _settle(plan, chain, T_at, candidate, fixed,
                                                  (near[worse] & CLAMPED) != 0, False,
                                                  tolerance, state)
                     if (exact.within(position, rotation, tolerance)
@@ -413,18 +451,18 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
                         ok[worse] = True
                         flags[worse] = regular_flags[worse]
                         errors[worse, 0], errors[worse, 1] = position, rotation
-    _merge_duplicates(chain, T_dh, seed, q, ok, errors, tolerance, member)
+    _merge_duplicates(chain, T_at, seed, q, ok, errors, tolerance, member)
     # a second root found by a branch goes to its own slot when a merge emptied that (its
     # seeded root was another branch's), else to its wrist twin's when that has none
-    _place_extras(chain, T_dh, extra, extra_ok, regular_flags, q, ok, flags, errors, 2)
+    _place_extras(chain, T_at, extra, extra_ok, regular_flags, q, ok, flags, errors, 2)
     if plan[PLAN.refine] != 0.0:
-        _retry_corrected(plan, g, chain, T_dh, seed, clamp, tolerance, regular, valid, near, q,
-                         ok, errors, flags, scratch)
+        _retry_corrected(plan, g, chain, T_dh, T_at, seed, clamp, tolerance, regular, valid,
+                         near, q, ok, errors, flags, scratch)
         # a root still without a slot takes the nearest empty one (elbow, then shoulder
         # partners): near a singularity the exact chain can have more roots for one ideal
         # branch than the ideal model has, while another branch's candidates found none
-        _place_extras(chain, T_dh, extra, extra_ok, regular_flags, q, ok, flags, errors, B)
-        _seed_root(plan, chain, T_dh, seed, tolerance, q, ok, errors)
+        _place_extras(chain, T_at, extra, extra_ok, regular_flags, q, ok, flags, errors, B)
+        _seed_root(plan, chain, T_at, seed, tolerance, q, ok, errors)
     # flags describe the solution returned: wrist and elbow from its joint values, shoulder
     # from the pose (where the two q1 roots meet depends on the pose alone)
     for b in range(B):
@@ -545,7 +583,8 @@ def _in_limits(chain: NDArray[np.float64], limits: NDArray[np.float64],
 @jit
 def _member_in_limits(plan: NDArray[np.float64], g: NDArray[np.float64],
                       chain: NDArray[np.float64], limits: NDArray[np.float64],
-                      T: NDArray[np.float64], seed: NDArray[np.float64], bits: int, b: int,
+                      T: NDArray[np.float64], T_at: NDArray[np.float64],
+                      seed: NDArray[np.float64], bits: int, b: int,
                       clamp: float, tolerance: float, candidate: NDArray[np.float64],
                       scratch: NDArray[np.float64], fixed: NDArray[np.bool_],
                       state: NDArray[np.float64]) -> tuple[float, float]:
@@ -569,7 +608,7 @@ def _member_in_limits(plan: NDArray[np.float64], g: NDArray[np.float64],
         for j in range(n):
             candidate[j] = q[b, j]
         _fix_free(plan, bits, fixed)
-        position, rotation = _settle(plan, chain, T, candidate, fixed,
+        position, rotation = _settle(plan, chain, T_at, candidate, fixed,
                                      (near[b] & CLAMPED) != 0, False, tolerance, state)
         if exact.within(position, rotation, tolerance) and _in_limits(
                 chain, limits, candidate, tolerance / plan[PLAN.lever]):
@@ -722,7 +761,8 @@ CORRECTIONS = 2
 @jit
 def _retry_corrected(plan: NDArray[np.float64], g: NDArray[np.float64],
                      chain: NDArray[np.float64], T: NDArray[np.float64],
-                     seed: NDArray[np.float64], clamp: float, tolerance: float,
+                     T_at: NDArray[np.float64], seed: NDArray[np.float64], clamp: float,
+                     tolerance: float,
                      regular: NDArray[np.float64], valid: NDArray[np.bool_],
                      near: NDArray[np.uint8], q: NDArray[np.float64], ok: NDArray[np.bool_],
                      errors: NDArray[np.float64], flags: NDArray[np.uint8],
@@ -756,14 +796,14 @@ def _retry_corrected(plan: NDArray[np.float64], g: NDArray[np.float64],
             for j in range(n):
                 start[j] = candidates[b, j]
             trial = start.copy()
-            exact.refine(chain, T, trial, fixed, tolerance)
-            position, rotation = exact.check(chain, trial, T, state)
+            exact.refine(chain, T_at, trial, fixed, tolerance)
+            position, rotation = exact.check(chain, trial, T_at, state)
             if exact.within(position, rotation, tolerance):
                 if not _known(chain, q, ok, trial):
                     for j in range(n):
                         q[b, j] = wrap(trial[j]) if chain[j, exact.JOINT.revolute] else trial[j]
                     ok[b] = True
-                    errors[b, 0], errors[b, 1] = exact.check(chain, q[b], T, state)
+                    errors[b, 0], errors[b, 1] = exact.check(chain, q[b], T_at, state)
                     flags[b] = c_flags[b]
                 break
 
@@ -786,7 +826,8 @@ def _corrected_target(ideal: NDArray[np.float64], chain: NDArray[np.float64],
     target[:3, :] = T
     inverse = np.eye(4)
     inverse[:3, :3] = E[:3, :3].T
-    inverse[:3, 3] = -(E[:3, :3].T @ E[:3, 3])
+    for r in range(3):
+        inverse[r, 3] = -(E[0, r] * E[0, 3] + E[1, r] * E[1, 3] + E[2, r] * E[2, 3])
     result = A @ inverse @ target
     for r in range(3):
         for c in range(4):
@@ -821,7 +862,7 @@ def _value_flags(plan: NDArray[np.float64], g: NDArray[np.float64],
 
 @jit
 def _family_free(plan: NDArray[np.float64], g: NDArray[np.float64],
-                 chain: NDArray[np.float64], T: NDArray[np.float64],
+                 chain: NDArray[np.float64], T: NDArray[np.float64], T_at: NDArray[np.float64],
                  solution: NDArray[np.float64], b: int, clamp: float, tolerance: float,
                  scratch: NDArray[np.float64], state: NDArray[np.float64]) -> bool:
     """Whether the pose leaves the wrist free at the tolerance: branch b's seeded member half a
@@ -838,7 +879,7 @@ def _family_free(plan: NDArray[np.float64], g: NDArray[np.float64],
     _family(plan, g, T, moved, WRIST, clamp, q, valid, flags, near, why, scratch)
     if not valid[b] or (near[b] & WRIST) == 0:
         return False
-    position, rotation = exact.check(chain, q[b], T, state)
+    position, rotation = exact.check(chain, q[b], T_at, state)
     return exact.within(position, rotation, tolerance)
 
 
@@ -901,13 +942,18 @@ def expand(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np
     """Step 4 for one pose: the solutions in order of branch, then of copy (mixed radix over the
     joints' copies, last joint fastest); with ``copies`` False one per branch, the copy nearest
     the seed. Returns the count, or -1 when out_q has too few rows."""
-    _, chain, limits = plan_parts(plan)
     n = q.shape[1]
     slack = tolerance / plan[PLAN.lever]
+    tolerance = verification_tolerance(plan, tolerance)
     value = fwork[:n]
     state = fwork[n:n + 12]
     T_dh = fwork[n + 12:n + 24].reshape(3, 4)
     projected = fwork[n + 24:n + 36].reshape(3, 4)
+    T_at = fwork[n + 36:n + 48].reshape(3, 4)
+    point = fwork[n + 48:n + 51]
+    tcp_point(frames, point)
+    plan = plan_at_tcp(plan, point)
+    _, chain, limits = plan_parts(plan)
     have_target = False
     first, counts, digits = iwork[:n], iwork[n:2 * n], iwork[2 * n:3 * n]
     slot = 0
@@ -941,8 +987,9 @@ def expand(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np
                 if not have_target:
                     project(T, projected)
                     to_dh(frames, projected, T_dh)
+                    at_point(T_dh, point, T_at)
                     have_target = True
-                position, rotation = exact.check(chain, value, T_dh, state)
+                position, rotation = exact.check(chain, value, T_at, state)
                 keep = exact.within(position, rotation, tolerance)
             if keep:
                 if slot >= out_q.shape[0]:
@@ -964,7 +1011,7 @@ def expand(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np
 @jit
 def work_sizes(n: int) -> tuple[int, int, int, int]:
     """Lengths of the float, bool, uint8 and int64 work arrays of one pose."""
-    floats = 52 + BRANCHES * n + n + WHY_SIZE
+    floats = 67 + BRANCHES * n + n + WHY_SIZE
     return floats, 3 * BRANCHES + n, 3 * BRANCHES, 3 * n
 
 

@@ -102,6 +102,26 @@ def project(T: NDArray[np.float64], out: NDArray[np.float64]) -> float:
 
 
 @jit
+def tcp_point(frames: NDArray[np.float64], out: NDArray[np.float64]) -> bool:
+    """out (3,) = the TCP's origin in DH frame n (the translation of tool @ tcp, from
+    frames[1] = (tool @ tcp)^-1); whether it is not the origin."""
+    F = frames[1]
+    for r in range(3):
+        out[r] = -(F[0, r] * F[0, 3] + F[1, r] * F[1, 3] + F[2, r] * F[2, 3])
+    return out[0] != 0.0 or out[1] != 0.0 or out[2] != 0.0
+
+
+@jit
+def at_point(T: NDArray[np.float64], point: NDArray[np.float64],
+             out: NDArray[np.float64]) -> None:
+    """out (3, 4) = T (3, 4) followed by the translation ``point`` (in T's frame)."""
+    for r in range(3):
+        for c in range(3):
+            out[r, c] = T[r, c]
+        out[r, 3] = T[r, 3] + T[r, 0] * point[0] + T[r, 1] * point[1] + T[r, 2] * point[2]
+
+
+@jit
 def to_dh(frames: NDArray[np.float64], T: NDArray[np.float64], out: NDArray[np.float64]) -> None:
     """out (3, 4) = top rows of frames[0] @ T @ frames[1] for a rigid T (3 rows suffice):
     base_link -> TCP becomes DH frame 0 -> DH frame n (frames: base^-1, (tool @ tcp)^-1)."""

@@ -238,3 +238,21 @@ def test_refined_tables_on_random_vendor_poses(name: str) -> None:
     run = Run(robot, vendor(name))
     run.check(robot.table.random_q(RANDOM, np.random.default_rng(106)))
     run.assert_clean(f"{name}: {RANDOM} random vendor poses")
+
+
+@pytest.mark.parametrize("name", REFINED_TABLES)
+def test_refined_tables_near_the_wrist_singularity(name: str) -> None:
+    """q5 = 0 and |q5| in [1e-12, 1e-6] on the vendor's model: the exact chain is a hair from
+    singular there (its roots are isolated, q4 and q6 no longer free) and has roots the ideal
+    model lacks; the sampled q comes back, flagged "wrist", and with the seed moved by +-0.05 rad
+    the nearest solution stays within 0.25 rad of it (the Kinova Gen3 once jumped 0.4-1 rad)."""
+    robot = dhkin.load(name)
+    rng = np.random.default_rng(107)
+    for label, q5 in (("q5 = 0", np.zeros(SINGULAR)),
+                      ("|q5| in [1e-12, 1e-6]", rng.choice([-1.0, 1.0], SINGULAR)
+                       * 10.0 ** rng.uniform(-12, -6, SINGULAR))):
+        q = robot.table.random_q(SINGULAR, rng)
+        q[:, 4] = q5
+        run = Run(robot, vendor(name))
+        run.check(q, wrist_singular=True, continuity=True, seed=5)
+        run.assert_clean(f"{name}: {SINGULAR} vendor poses at {label}")

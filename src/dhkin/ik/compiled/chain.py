@@ -50,6 +50,12 @@ GROWTH = 1e6
 #: Damping after a rejected step: this fraction of the diagonal of J^T J first, growing a
 #: hundredfold per rejection (Levenberg-Marquardt); a taken step divides it by ten.
 DAMPING_START = 1e-9
+#: Damping to start from when the start is not a closed-form candidate but a seed (Marquardt's
+#: start for a guess that may be far from a root: a hundredth of the diagonal of J^T J, decaying
+#: tenfold per taken step). Near a singularity of the exact chain, undamped steps run along
+#: its weak direction to another root; on the Kinova Gen3's near-singular poses where that
+#: happened a start from 1e-4 to 1 reached the root nearest the seed, 1e-6 did not.
+SEED_DAMPING = 1e-2
 #: Largest damping before giving up (the step is then shorter than rounding).
 DAMPING_LIMIT = 1e12
 
@@ -274,7 +280,8 @@ def _least_squares(J: NDArray[np.float64], e: NDArray[np.float64], fixed: NDArra
 @jit
 def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
            fixed: NDArray[np.bool_], tolerance: float,
-           budget: int = 4 * MAX_STEPS, growth: float = GROWTH) -> tuple[float, float]:
+           budget: int = 4 * MAX_STEPS, growth: float = GROWTH,
+           damping_start: float = 0.0) -> tuple[float, float]:
     """Newton's method on the exact chain from q (n,), in place, towards the target T (3, 4),
     DH frame 0 -> n; joints marked ``fixed`` keep their value (the seed's choice of a free joint
     at a singularity). q ends as the best iterate; returns its (position, rotation) errors.
@@ -285,7 +292,8 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
     unless it makes |e| more than ``growth`` times larger (GROWTH: Newton may cross a hump on its
     way to a far root; 1: a monotone Levenberg-Marquardt descent to the least-squares point, for
     targets a hair beyond a fold); then lambda grows (DAMPING_START, x100) and the step is solved
-    again. Stops when both errors are below REFINE_FRACTION *
+    again; ``damping_start`` (default: none) damps the first steps. Stops when both errors are
+    below REFINE_FRACTION *
     tolerance, after MAX_STEPS, after ``budget`` evaluations of the chain, or when lambda passes
     DAMPING_LIMIT.
     """
@@ -310,7 +318,7 @@ def refine(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.flo
     # wrist) carry no information: this damping floor suppresses them, keeping the step the
     # minimum-norm one, while sigma ~ 1e-8 (a chain a hair from singular) stays fully active.
     floor = (goal / MAX_JOINT_STEP) ** 2
-    damping = floor
+    damping = max(floor, damping_start)
     evaluations = 1
     for _ in range(MAX_STEPS):
         if (position <= goal and rotation <= goal) or evaluations >= budget:

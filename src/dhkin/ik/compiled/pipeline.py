@@ -629,7 +629,7 @@ def _seed_root(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray
     """A refined table's seed within one maximal Newton step of the pose (rotation error at
     most MAX_JOINT_STEP, position error at most that times the lever) is a start as good as
     the ideal model's closed form, which is up to the family band off the exact chain: a
-    monotone descent from it finds the root in its basin. Near a
+    monotone, damped descent from it (SEED_DAMPING) finds the root in its basin. Near a
     singularity the exact chain can have roots the ideal model has not (a wrist 0.175 mm from
     spherical: one at q5 ~ 0 beside the two at q5 ~ +-0.03); such a root, when it is nearer
     the seed than the solution of the branch it lies nearest, takes that branch's slot (its
@@ -641,7 +641,8 @@ def _seed_root(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray
         return
     root = seed.copy()
     fixed = np.zeros(n, np.bool_)
-    position, rotation = exact.refine(chain, T, root, fixed, tolerance, 4 * exact.MAX_STEPS, 1.0)
+    position, rotation = exact.refine(chain, T, root, fixed, tolerance, 4 * exact.MAX_STEPS, 1.0,
+                                      exact.SEED_DAMPING)
     if not exact.within(position, rotation, tolerance):
         return
     for j in range(n):

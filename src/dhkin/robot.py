@@ -164,28 +164,32 @@ class Robot:
 
     def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                  tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
-                 copies: bool = False, chunk_size: int = DEFAULT_CHUNK
+                 copies: bool = False, chunk_size: int = DEFAULT_CHUNK,
+                 workers: int | None = None
                  ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m).
 
         The same solutions as :meth:`ik` pose by pose, in the same order; rows are padded to the
         largest count m (m <= 8 without copies; with every copy a UR arm's +-360 deg joints give
         up to 256 or more per pose: see :meth:`ik_batch_chunks` for very large batches).
-        Without a closed-form family the numerical solver answers (``copies`` and
-        ``chunk_size`` do not apply).
+        ``workers`` threads share the poses (default: the CPUs this process may use; the
+        result does not depend on it). Without a closed-form family the numerical solver
+        answers (``copies``, ``chunk_size`` and ``workers`` do not apply).
         """
         if self._closed_form_solver is None:
             from dhkin.ik.numerical import solver_for_robot
 
             return solver_for_robot(self).solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)
-        batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp, copies, chunk_size)
+        batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
         return batch.q, batch.valid
 
     def ik_batch_detailed(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                           tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
-                          copies: bool = False, chunk_size: int = DEFAULT_CHUNK) -> IKBatch:
+                          copies: bool = False, chunk_size: int = DEFAULT_CHUNK,
+                          workers: int | None = None) -> IKBatch:
         """Like :meth:`ik_batch`, with flags, branch indices, residuals and projections."""
-        return self.ik_solver.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size)
+        return self.ik_solver.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size,
+                                          workers)
 
     def ik_batch_chunks(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                         tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,

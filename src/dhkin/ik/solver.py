@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import threading
 from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import ThreadPoolExecutor
 from types import MappingProxyType, ModuleType
 from typing import Any
 
@@ -35,6 +37,12 @@ TWO_PI = 2.0 * math.pi
 DEFAULT_TOLERANCE = 1e-9
 #: Poses per kernel call of :meth:`ClosedFormSolver.solve_batch`.
 DEFAULT_CHUNK = 65536
+#: A batch is shared among worker threads (the kernels release the GIL) only when each gets at
+#: least this many poses: starting a slice costs ~30 us, the work of a few poses; each pose is
+#: solved alone, so the result does not depend on the number of workers.
+POSES_PER_WORKER = 512
+#: Slices per worker thread of a shared batch (see :func:`_in_slices`).
+SLICES_PER_WORKER = 4
 #: solve_chunks' default chunks hold at most this much output (bytes).
 STREAM_BYTES = 64 * 2**20
 #: On a refined table, roots near a reach boundary are computed as if the target were at least
@@ -383,19 +391,22 @@ class ClosedFormSolver:
 
     def solve_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                     tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
-                    copies: bool = False, chunk_size: int = DEFAULT_CHUNK) -> IKBatch:
+                    copies: bool = False, chunk_size: int = DEFAULT_CHUNK,
+                    workers: int | None = None) -> IKBatch:
         """Every solution of N poses (N, 4, 4), as :meth:`solve_one` pose by pose, padded to the
-        largest count; poses run in chunks of ``chunk_size``."""
+        largest count; poses run in chunks of ``chunk_size``, each shared among ``workers``
+        threads (default: the CPUs this process may use; see :data:`POSES_PER_WORKER`)."""
         tolerance = check_tolerance(tolerance)
+        workers = check_workers(workers)
         targets, _ = as_targets(T)
         seeds = self._seeds(q_seed, targets.shape[0])
         frames = self.frames if tcp is None else self.frames_for(tcp)
         return self._batch(targets, seeds, tolerance, frames, bool(copies),
-                           _check_chunk(chunk_size), 0)
+                           _check_chunk(chunk_size), 0, workers)
 
     def _batch(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                tolerance: float, frames: NDArray[np.float64], copies: bool, chunk_size: int,
-               first_index: int) -> IKBatch:
+               first_index: int, workers: int = 1) -> IKBatch:
         """solve_batch of checked inputs; ``first_index`` numbers the poses in errors.
 
         Chunk by chunk: the principal solutions of a chunk (steps 1-3), then its solutions
@@ -413,15 +424,25 @@ class ClosedFormSolver:
             stop = min(start + chunk_size, N)
             part = seeds if seeds.shape[0] == 1 else seeds[start:stop]
             principal = self._principal(targets[start:stop], part, tolerance, frames, copies,
-                                        first_index + start)
-            q, ok, flags, errors, totals, info = principal
+                                        first_index + start, workers)
+            totals, info = principal[4:]
             projection[start:stop] = info[:, kernels.INFO.projection]
             dropped[start:stop] = info[:, kernels.INFO.dropped]
             chunk_width = int(totals.sum(axis=1).max()) if stop > start else 0
             target = (self._batch_arrays(stop - start, chunk_width) if copies
                       else tuple(a[start:stop] for a in out))  # type: ignore[union-attr]
-            kernels.expand_batch(self.plan, frames, targets[start:stop], part, tolerance,
-                                 copies, q, ok, flags, errors, *target)
+            chunk_targets = targets[start:stop]
+
+            def expand(a: int, b: int, chunk_targets: NDArray[np.float64] = chunk_targets,
+                       part: NDArray[np.float64] = part, principal: tuple[Any, ...] = principal,
+                       target: tuple[Any, ...] = target) -> None:
+                q, ok, flags, errors = principal[:4]
+                kernels.expand_batch(self.plan, frames, chunk_targets[a:b],
+                                     part if part.shape[0] == 1 else part[a:b], tolerance,
+                                     copies, q[a:b], ok[a:b], flags[a:b], errors[a:b],
+                                     *(array[a:b] for array in target))
+
+            _in_slices(stop - start, workers, expand)
             width = max(width, int(target[1].sum(axis=1).max()) if stop > start else 0)
             if copies:
                 chunks.append((start, stop, target))
@@ -448,9 +469,10 @@ class ClosedFormSolver:
 
     def _principal(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                    tolerance: float, frames: NDArray[np.float64], copies: bool,
-                   first_index: int) -> tuple[NDArray[Any], ...]:
+                   first_index: int, workers: int = 1) -> tuple[NDArray[Any], ...]:
         """Steps 1-3 for checked poses: q, ok, flags, errors, totals, info (see
-        dhkin.ik.compiled.pipeline.solve_batch); a rejected pose raises IKInputError."""
+        dhkin.ik.compiled.pipeline.solve_batch), in contiguous slices on up to ``workers``
+        threads; a rejected pose raises IKInputError."""
         kernels = _kernels()
         N, B, n = targets.shape[0], self.n_branches, self.dof
         q = np.empty((N, B, n))
@@ -460,8 +482,14 @@ class ClosedFormSolver:
         totals = np.empty((N, B), np.int64)
         why = np.empty((N, kernels.WHY_SIZE))
         info = np.empty((N, kernels.INFO.size))
-        kernels.solve_batch(self.plan, frames, targets, seeds, tolerance, copies, q, ok, flags,
-                            errors, totals, why, info)
+
+        def solve(a: int, b: int) -> None:
+            kernels.solve_batch(self.plan, frames, targets[a:b],
+                                seeds if seeds.shape[0] == 1 else seeds[a:b], tolerance, copies,
+                                q[a:b], ok[a:b], flags[a:b], errors[a:b], totals[a:b], why[a:b],
+                                info[a:b])
+
+        _in_slices(N, workers, solve)
         self._raise_rejected(targets, info, first_index)
         return q, ok, flags, errors, totals, info
 
@@ -517,6 +545,52 @@ class ClosedFormSolver:
             part = seeds if seeds.shape[0] == 1 else seeds[start:stop]
             yield start, self._batch(targets[start:stop], part, tolerance, frames, bool(copies),
                                      chunk_size, start)
+
+
+def default_workers() -> int:
+    """The CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def check_workers(workers: Any) -> int:
+    """``workers`` as a positive int (None: :func:`default_workers`); IKInputError otherwise."""
+    if workers is None:
+        return default_workers()
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise IKInputError(f"workers: expected a positive integer or None (the CPUs this "
+                           f"process may use), got {workers!r}")
+    return int(workers)
+
+
+def _in_slices(n: int, workers: int, work: Callable[[int, int], None]) -> None:
+    """work(a, b) over contiguous slices of range(n), each of at least POSES_PER_WORKER poses,
+    SLICES_PER_WORKER per worker thread (poses near singularities or on refined tables take
+    longer: small slices keep the threads busy alike); one slice, in this thread, for a small n
+    or one worker."""
+    threads = max(1, min(workers, n // POSES_PER_WORKER))
+    if threads == 1:
+        work(0, n)
+        return
+    slices = max(threads, min(threads * SLICES_PER_WORKER, n // POSES_PER_WORKER))
+    bounds = [n * k // slices for k in range(slices + 1)]
+    futures = [_pool(threads).submit(work, bounds[k], bounds[k + 1]) for k in range(slices)]
+    for future in futures:
+        future.result()
+
+
+_POOL: dict[int, ThreadPoolExecutor] = {}
+_POOL_LOCK = threading.Lock()
+
+
+def _pool(size: int) -> ThreadPoolExecutor:
+    """A shared pool of ``size`` threads for batch slices (created on first use)."""
+    with _POOL_LOCK:
+        if size not in _POOL:
+            _POOL[size] = ThreadPoolExecutor(max_workers=size, thread_name_prefix="dhkin-ik")
+        return _POOL[size]
 
 
 def _check_chunk(chunk_size: Any) -> int:

@@ -484,7 +484,7 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
                                                 False, q, ok, flags, errors, totals, why, info))
     expand = best(lambda: kernels.expand_batch(solver.plan, solver.frames, T, seeds, 1e-9, False,
                                                q, ok, flags, errors, *out))
-    batch = best(lambda: robot.ik_batch(T, copies=False))
+    batch = best(lambda: robot.ik_batch(T, copies=False, workers=1))
     robot.ik(T[0])  # this thread's buffers
     buffers = solver._buffers.arrays
     sample = T[:2000]

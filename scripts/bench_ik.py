@@ -632,8 +632,9 @@ def build_libraries(robot: dhkin.Robot, peers: Sequence[str], rtb_poses: int
     cores = default_workers()
     if cores > 1:  # the batch on every core, dhkin's and EAIK's
         libraries.append(dhkin_library(robot, copies=False, workers=cores))
-        if "eaik" in peers and not isinstance(eaik_library(robot, cores), str):
-            libraries.append(eaik_library(robot, cores))  # type: ignore[arg-type]
+        shared_eaik = eaik_library(robot, cores) if "eaik" in peers else "not asked for"
+        if not isinstance(shared_eaik, str):
+            libraries.append(shared_eaik)
     skipped: list[tuple[str, str]] = []
     makers: dict[str, tuple[str, Callable[[], Library | str]]] = {
         "eaik": ("EAIK", lambda: eaik_library(robot)),

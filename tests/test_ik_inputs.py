@@ -206,32 +206,30 @@ def _solved_exactly_and_completely(table: dhkin.DHTable, n: int, seed: int) -> N
     assert worst <= 1e-9 and missing == 0, (worst, missing)
 
 
+#: Band edges: (table change at the band's width, the condition named beyond it, seed).
+BAND_EDGES = {
+    "angle": (lambda scale: {"alpha2_deg": np.degrees(BAND.angle) * scale},  # axes 2, 3
+              r"beyond the band: axes 2 and 3 parallel", 41),
+    "length": (lambda scale: {"a5": BAND.length * scale}, r"axes 5 and 6 meet", 42),
+}
+
+
 @pytest.mark.parametrize("inside", [True, False])
-def test_band_edge_in_angle(inside: bool) -> None:
-    """alpha2 (axes 2 and 3 parallel) off by just under / over the band."""
-    off = np.degrees(BAND.angle) * (0.95 if inside else 1.05)
-    table = _ur5_with(alpha2_deg=off)
+@pytest.mark.parametrize("edge", sorted(BAND_EDGES))
+def test_band_edge(edge: str, inside: bool) -> None:
+    """alpha2 (axes 2 and 3 parallel) or a5 (axes 5 and 6 meet) off by just under / over the
+    band: refined and exact inside; beyond it no family, and IK falls back on the numerical
+    solver."""
+    change, message, seed = BAND_EDGES[edge]
+    table = _ur5_with(**change(0.95 if inside else 1.05))
     if inside:
         fit = fit_family(table)
         assert fit.family == "offset_wrist" and fit.refine
-        _solved_exactly_and_completely(table, 1000, 41)
+        _solved_exactly_and_completely(table, 1000, seed)
     else:
-        with pytest.raises(FamilyError, match=r"beyond the band: axes 2 and 3 parallel"):
+        with pytest.raises(FamilyError, match=message):
             fit_family(table)
         assert dhkin.Robot(table).ik(dhkin.Robot(table).fk(np.zeros(6))).numerical
-
-
-@pytest.mark.parametrize("inside", [True, False])
-def test_band_edge_in_length(inside: bool) -> None:
-    """a5 (axes 5 and 6 meet) off by just under / over the band."""
-    table = _ur5_with(a5=BAND.length * (0.95 if inside else 1.05))
-    if inside:
-        fit = fit_family(table)
-        assert fit.family == "offset_wrist" and fit.refine
-        _solved_exactly_and_completely(table, 1000, 42)
-    else:
-        with pytest.raises(FamilyError, match=r"axes 5 and 6 meet"):
-            fit_family(table)
 
 
 @pytest.mark.parametrize("factor", [3.0, 8.0])

@@ -237,6 +237,18 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
 
 
 @jit
+def _settle_free(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np.float64],
+                 start: NDArray[np.float64], candidate: NDArray[np.float64],
+                 fixed: NDArray[np.bool_], clamped: bool, long_shot: bool, tolerance: float,
+                 state: NDArray[np.float64]) -> tuple[float, float]:
+    """:func:`_settle` of ``start`` copied into ``candidate`` with every joint free."""
+    for j in range(start.shape[0]):
+        candidate[j] = start[j]
+        fixed[j] = False
+    return _settle(plan, chain, T, candidate, fixed, clamped, long_shot, tolerance, state)
+
+
+@jit
 def _finite(values: NDArray[np.float64]) -> bool:
     return np.all(np.isfinite(values))
 
@@ -392,22 +404,17 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             # the seeded candidate verified only with its free joint released: the exact chain
             # is not singular here, and the regular candidate may reach another root of the
             # pose (kept as an extra; the seeded root, the one nearest the seed, stays)
-            for j in range(n):
-                candidate[j] = regular[b, j]
-                fixed[j] = False
-            position, rotation = _settle(plan, chain, T_at, candidate, fixed,
-                                         (near[b] & CLAMPED) != 0, False, tolerance, state)
+            position, rotation = _settle_free(plan, chain, T_at, regular[b], candidate, fixed,
+                                              (near[b] & CLAMPED) != 0, False, tolerance, state)
             if exact.within(position, rotation, tolerance):
                 for j in range(n):
                     extra[b, j] = candidate[j]
                 extra_ok[b] = True
         if not ok[b] and (valid[b] or long_shot):
             tried = tried or valid[b]
-            for j in range(n):
-                candidate[j] = q[b, j]
-                fixed[j] = False
-            position, rotation = _settle(plan, chain, T_at, candidate, fixed,
-                                         (near[b] & CLAMPED) != 0, long_shot, tolerance, state)
+            position, rotation = _settle_free(plan, chain, T_at, q[b], candidate, fixed,
+                                              (near[b] & CLAMPED) != 0, long_shot, tolerance,
+                                              state)
             if exact.within(position, rotation, tolerance):
                 tried = True
                 for j in range(n):
@@ -436,14 +443,12 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             else:
                 # singular to within the seed band but not to within the tolerance over half a
                 # turn of the family: the flip is a distinct solution, the regular candidate's
-                for j in range(n):
-                    candidate[j] = regular[worse, j]
-                    fixed[j] = False
                 ok[worse] = False
                 if valid[worse]:
-                    position, rotation = _settle(plan, chain, T_at, candidate, fixed,
-                                                 (near[worse] & CLAMPED) != 0, False,
-                                                 tolerance, state)
+                    position, rotation = _settle_free(plan, chain, T_at, regular[worse],
+                                                      candidate, fixed,
+                                                      (near[worse] & CLAMPED) != 0, False,
+                                                      tolerance, state)
                     if (exact.within(position, rotation, tolerance)
                             and not _known(chain, q, ok, candidate)):
                         for j in range(n):
@@ -952,9 +957,8 @@ def expand(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np
     projected = fwork[n + 24:n + 36].reshape(3, 4)
     T_at = fwork[n + 36:n + 48].reshape(3, 4)
     point = fwork[n + 48:n + 51]
-    tcp_point(frames, point)
-    plan = plan_at_tcp(plan, point)
     _, chain, limits = plan_parts(plan)
+    at_chain = chain  # the chain ending at the TCP (plan_at_tcp), made when first needed
     have_target = False
     first, counts, digits = iwork[:n], iwork[n:2 * n], iwork[2 * n:3 * n]
     slot = 0
@@ -988,9 +992,11 @@ def expand(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np
                 if not have_target:
                     project(T, projected)
                     to_dh(frames, projected, T_dh)
+                    tcp_point(frames, point)
                     at_point(T_dh, point, T_at)
+                    _, at_chain, _ = plan_parts(plan_at_tcp(plan, point))
                     have_target = True
-                position, rotation = exact.check(chain, value, T_at, state)
+                position, rotation = exact.check(at_chain, value, T_at, state)
                 keep = exact.within(position, rotation, tolerance)
             if keep:
                 if slot >= out_q.shape[0]:

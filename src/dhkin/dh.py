@@ -537,7 +537,7 @@ def table_to_yaml(table: DHTable, units: Mapping[str, str] | None = None,
     def angle(value: float) -> str:
         return _yaml_number(math.degrees(value) if angle_scale != 1.0 else value)
 
-    def vector(values: Sequence[float], fmt: Any) -> str:
+    def vector(values: Sequence[float] | NDArray[np.float64], fmt: Any) -> str:
         return "[" + ", ".join(fmt(float(v)) for v in values) + "]"
 
     def frame(T: NDArray[np.float64]) -> str:

@@ -457,8 +457,8 @@ def _branch_end_cells(model: SingularityModel, solver: BranchSolver, kind: str, 
     for axis in (1, 2):
         for step in (1, -1):
             d = np.moveaxis(distance, axis, 1)
-            ok = np.moveaxis(valid, axis, 1)
-            there = np.moveaxis(reachable, axis - 1, 0)
+            ok = np.moveaxis(np.asarray(valid), axis, 1)
+            there = np.moveaxis(np.asarray(reachable), axis - 1, 0)
             if step == -1:
                 d, ok, there = d[:, ::-1], ok[:, ::-1], there[::-1]
             previous, current = d[:, :-2], d[:, 1:-1]
@@ -774,7 +774,7 @@ def cli_map(args: argparse.Namespace) -> int:
     robot = load(args.robot)
     rpy = None
     if args.rpy is not None:
-        rpy = np.radians(args.rpy) if args.deg else np.asarray(args.rpy, dtype=float)
+        rpy = [float(v) for v in (np.radians(args.rpy) if args.deg else args.rpy)]
     q_fixed = None
     if args.q is not None:
         q_fixed = cli_joint_values(robot, args.q, bool(args.deg), "--q")

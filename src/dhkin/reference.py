@@ -178,7 +178,7 @@ class Reference:
             yoshikawa=_yoshikawa(J),
             translational=_yoshikawa(J[:3]),
             rotational=_yoshikawa(J[3:]),
-            singular_values=sigma,
+            singular_values=np.asarray(sigma, dtype=np.float64),
             sigma_min=sigma_min,
             condition=float(sigma[0] / sigma_min) if sigma_min > 0 else float("inf"),
         )

@@ -952,7 +952,7 @@ def _events(signed: Array, distance: Array, threshold: float) -> list[tuple[floa
         if sign[i] * sign[i + 1] < 0:
             found.append((i + signed[i] / (signed[i] - signed[i + 1]), "crosses"))
             used[i] = used[i + 1] = True
-    for i in np.flatnonzero(sign == 0):
+    for i in np.flatnonzero(sign == 0).tolist():
         if used[i]:
             continue
         before = sign[i - 1] if i > 0 else 0

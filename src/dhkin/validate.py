@@ -762,7 +762,7 @@ def validate(robot: Robot, ik: IKCallable | None = None, n: int = 10_000, seed: 
     q, sets = sample_joint_vectors(robot, n, seed)
     return _run(robot, model, callable_ik, q, sets, perturbed_seeds(robot, q, sets, seed), seed,
                 tolerance, joint_tolerance, progress,
-                ik_name or getattr(callable_ik, "__name__", "ik"), complete_expected)
+                ik_name or str(getattr(callable_ik, "__name__", "ik")), complete_expected)
 
 
 def _run(robot: Robot, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
@@ -925,7 +925,7 @@ def replay(robot: Robot, ik: IKCallable, path: str | Path, ik_name: str | None =
     if complete_expected is None:
         complete_expected = bool(data.get("complete_expected", True))
     return _run(robot, model, ik, q, sets, perturbed, seed, tolerance, joint_tolerance, False,
-                ik_name or getattr(ik, "__name__", "ik"), complete_expected)
+                ik_name or str(getattr(ik, "__name__", "ik")), complete_expected)
 
 
 def tool_frame_from_robot(robot: Robot, frame: str) -> NDArray[np.float64]:

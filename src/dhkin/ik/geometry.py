@@ -83,7 +83,7 @@ def common_point(axes: Sequence[JointAxis]) -> Vector:
         projector = np.eye(3) - np.outer(axis.direction, axis.direction)
         normal_matrix += projector
         rhs += projector @ axis.point
-    return np.linalg.lstsq(normal_matrix, rhs, rcond=None)[0]
+    return np.asarray(np.linalg.lstsq(normal_matrix, rhs, rcond=None)[0], dtype=np.float64)
 
 
 def closest_point(first: JointAxis, second: JointAxis) -> Vector:

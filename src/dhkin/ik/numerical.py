@@ -62,7 +62,7 @@ import weakref
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal, TypeAlias
+from typing import TYPE_CHECKING, Any, Literal, TypeAlias
 
 import eigenpy
 import numpy as np
@@ -482,7 +482,8 @@ class NumericalIK:
                     bank.grow(max(16, len(bank.starts)))
                 yield bank.starts[index]
             return
-        generator = np.random.default_rng() if rng is None else rng
+        # rng was checked in solve(): a Generator here, or None
+        generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng()
         for _ in range(count):
             yield generator.uniform(self._random_low, self._random_high)
 
@@ -601,7 +602,7 @@ class NumericalIK:
     # --------------------------------------------------------------------------- internals
     def _settings(self, tolerance: float | None, method: Method | None,
                   max_iterations: int | None) -> SolverSettings:
-        changes: dict[str, object] = {}
+        changes: dict[str, Any] = {}
         if tolerance is not None:
             changes["tolerance"] = tolerance
         if method is not None:
@@ -885,7 +886,7 @@ class NumericalIK:
             else:
                 if residual <= _SLIDE_CLOSE:
                     cap = min(2.0 * cap, _SLIDE_STEP)
-                pseudo_inverse = np.linalg.pinv(J, rcond=_PINV_RCOND)
+                pseudo_inverse = np.asarray(np.linalg.pinv(J, rcond=_PINV_RCOND), dtype=np.float64)
                 pull = settings.nullspace_gain * task.weights * (task.preferred - q)
                 null_step = self._null_motion(q, J, pseudo_inverse, pull)
                 largest = float(np.abs(null_step).max())

@@ -49,7 +49,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
 from dhkin.ik.compiled.layout import pack
@@ -175,7 +175,7 @@ def frame_one_x_point(table: DHTable, axes: Sequence[JointAxis]) -> Vector:
 
 
 def shoulder_wrist_values(shoulder: Shoulder, wrist: Wrist, flange_zero: NDArray[np.float64],
-                          signs: Sequence[float], scale: float) -> dict[str, object]:
+                          signs: Sequence[float], scale: float) -> dict[str, ArrayLike]:
     """The shoulder and wrist fields of the compiled geometry (layout GEOMETRY)."""
     c, s = np.cos(wrist.tilt), np.sin(wrist.tilt)
     tilt_back = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])

@@ -9,7 +9,7 @@ freezes a global namedtuple into constants. :func:`pack` fills a vector from nam
 from __future__ import annotations
 
 from collections import namedtuple
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -26,7 +26,8 @@ def layout(name: str, fields: Sequence[tuple[str, int]]) -> Any:
         offsets.append(at)
         at += length
     sizes = dict(fields)
-    value = namedtuple(name, [*names, "size"])(*offsets, at)
+    make_type: Callable[..., Any] = namedtuple  # field names known at run time only
+    value = make_type(name, [*names, "size"])(*offsets, at)
     _SIZES[name] = sizes
     return value
 

@@ -250,12 +250,12 @@ def _settle_free(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArr
 
 @jit
 def _finite(values: NDArray[np.float64]) -> bool:
-    return np.all(np.isfinite(values))
+    return bool(np.all(np.isfinite(values)))
 
 
 @jit
 def _any(flags: NDArray[np.bool_]) -> bool:
-    return np.any(flags)
+    return bool(np.any(flags))
 
 
 @jit

@@ -20,7 +20,7 @@ import pytest
 from numba import njit
 
 import dhkin
-from dhkin.errors import IKInputError
+from dhkin.errors import InputError
 from dhkin.ik.compiled import elementary
 from dhkin.ik.result import flag_names
 from dhkin.ik.solver import POSES_PER_WORKER
@@ -247,10 +247,10 @@ def test_worker_threads_share_a_batch_without_changing_it(load_robot, name):
             np.testing.assert_array_equal(getattr(shared, field), getattr(one, field))
     bad = T.copy()
     bad[2 * POSES_PER_WORKER + 3, :3, :3] *= 2.0
-    with pytest.raises(IKInputError, match=rf"T\[{2 * POSES_PER_WORKER + 3}\]: rotation"):
+    with pytest.raises(InputError, match=rf"T\[{2 * POSES_PER_WORKER + 3}\]: rotation"):
         robot.ik_batch(bad, workers=3)
     for wrong in (0, -1, 1.5, True, "2"):
-        with pytest.raises(IKInputError, match=r"workers: expected a positive integer or None"):
+        with pytest.raises(InputError, match=r"workers: expected a positive integer or None"):
             robot.ik_batch(T[:3], workers=wrong)
 
 
@@ -287,23 +287,23 @@ def test_bad_inputs_name_the_pose(load_robot):
     T = robot.fk(robot.table.random_q(40, np.random.default_rng(14)))
     bad = T.copy()
     bad[33, :3, :3] *= 2.0
-    with pytest.raises(IKInputError, match=r"T\[33\]: rotation block is not a rotation"):
+    with pytest.raises(InputError, match=r"T\[33\]: rotation block is not a rotation"):
         robot.ik_batch(bad)
-    with pytest.raises(IKInputError, match=r"T\[33\]: rotation block is not a rotation"):
+    with pytest.raises(InputError, match=r"T\[33\]: rotation block is not a rotation"):
         list(robot.ik_batch_chunks(bad, chunk_size=10))
-    with pytest.raises(IKInputError, match=r"T\[33\]: rotation block is not a rotation"):
+    with pytest.raises(InputError, match=r"T\[33\]: rotation block is not a rotation"):
         robot.ik_solver.branches(bad)
     bad[5, 0, 0] = np.nan
-    with pytest.raises(IKInputError, match="finite"):
+    with pytest.raises(InputError, match="finite"):
         robot.ik_batch(bad, chunk_size=3)
-    with pytest.raises(IKInputError, match="finite"):
+    with pytest.raises(InputError, match="finite"):
         robot.ik(bad[5])
-    with pytest.raises(IKInputError, match=r"q_seed: expected finite values, got .*inf"):
+    with pytest.raises(InputError, match=r"q_seed: expected finite values, got .*inf"):
         robot.ik(T[0], q_seed=np.full(6, np.inf))
-    with pytest.raises(IKInputError,
+    with pytest.raises(InputError,
                        match=r"q_seed: expected shape \(6,\) or \(1, 6\), got \(5,\)"):
         robot.ik(T[0], q_seed=np.zeros(5))
-    with pytest.raises(IKInputError, match="chunk_size"):
+    with pytest.raises(InputError, match="chunk_size"):
         robot.ik_batch(T, chunk_size=0)
     assert robot.ik_batch(T[0])[0].shape[0] == 1  # one pose as a batch of one
 

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import dhkin
-from dhkin.errors import FamilyError, IKInputError
+from dhkin.errors import FamilyError, InputError
 from dhkin.ik.compiled.pose import BOTTOM_ROW_TOLERANCE, ORTHONORMALITY_GATE
 from dhkin.ik.family import BAND, fit_family
 from dhkin.ik.numerical import NumericalIK
@@ -103,7 +103,7 @@ def test_bottom_row_and_rotation_gates_at_their_edges() -> None:
     for bad in ([0.0, 0.0, 0.0, 1.0 + 2 * BOTTOM_ROW_TOLERANCE], [1e-6, 0.0, 0.0, 1.0]):
         pose = T.copy()
         pose[3] = bad
-        with pytest.raises(IKInputError, match=r"T: bottom row is .* expected \[0, 0, 0, 1\]"):
+        with pytest.raises(InputError, match=r"T: bottom row is .* expected \[0, 0, 0, 1\]"):
             robot.ik(pose)
     fine = T.copy()
     fine[3, 3] = 1.0 + 0.5 * BOTTOM_ROW_TOLERANCE
@@ -117,14 +117,14 @@ def test_bottom_row_and_rotation_gates_at_their_edges() -> None:
     position, rotation = pose_error(robot.reference().fk(sols.q),
                                     np.broadcast_to(projected(inside[None])[0], (len(sols), 4, 4)))
     assert position.max() <= 1e-9 and rotation.max() <= 1e-9
-    with pytest.raises(IKInputError, match="rotation block is not a rotation"):
+    with pytest.raises(InputError, match="rotation block is not a rotation"):
         robot.ik(outside)
     mirrored = T.copy()
     mirrored[:3, 0] *= -1.0  # det = -1: orthonormal, but not a rotation
-    with pytest.raises(IKInputError, match=r"det = -1"):
+    with pytest.raises(InputError, match=r"det = -1"):
         robot.ik(mirrored)
     batch = np.stack([T, T, outside])
-    with pytest.raises(IKInputError, match=r"T\[2\]: rotation block"):
+    with pytest.raises(InputError, match=r"T\[2\]: rotation block"):
         robot.ik_batch(batch)
 
 
@@ -133,26 +133,26 @@ def test_bottom_row_and_rotation_gates_at_their_edges() -> None:
 def test_tolerance_must_be_a_positive_finite_number(tolerance: object) -> None:
     robot = dhkin.load("ur5")
     T = robot.fk(np.zeros(6))
-    with pytest.raises(IKInputError, match="tolerance: expected a positive finite number"):
+    with pytest.raises(InputError, match="tolerance: expected a positive finite number"):
         robot.ik(T, tolerance=tolerance)  # type: ignore[arg-type]
-    with pytest.raises(IKInputError, match="tolerance: expected a positive finite number"):
+    with pytest.raises(InputError, match="tolerance: expected a positive finite number"):
         robot.ik_batch(T[None], tolerance=tolerance)  # type: ignore[arg-type]
 
 
 def test_bad_seeds_and_tcp_name_the_argument() -> None:
     robot = dhkin.load("ur5")
     T = robot.fk(np.zeros(6))
-    with pytest.raises(IKInputError, match=r"q_seed: expected shape \(6,\)"):
+    with pytest.raises(InputError, match=r"q_seed: expected shape \(6,\)"):
         robot.ik(T, q_seed=np.zeros(7))
-    with pytest.raises(IKInputError, match="q_seed: expected finite values"):
+    with pytest.raises(InputError, match="q_seed: expected finite values"):
         robot.ik(T, q_seed=[0, 0, np.nan, 0, 0, 0])
-    with pytest.raises(IKInputError, match="q_seed: expected numbers"):
+    with pytest.raises(InputError, match="q_seed: expected numbers"):
         robot.ik(T, q_seed=["a"] * 6)
-    with pytest.raises(IKInputError, match="tcp: expected a finite"):
+    with pytest.raises(InputError, match="tcp: expected a finite"):
         robot.ik(T, tcp=np.eye(3))
     tilted = np.eye(4)
     tilted[3, 0] = 0.1
-    with pytest.raises(IKInputError, match="tcp: bottom row"):
+    with pytest.raises(InputError, match="tcp: bottom row"):
         robot.ik(T, tcp=tilted)
 
 

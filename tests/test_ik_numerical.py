@@ -17,7 +17,7 @@ import pinocchio as pin
 import pytest
 
 import dhkin
-from dhkin.errors import IKInputError
+from dhkin.errors import InputError
 from dhkin.ik.numerical import (
     DEFAULT_TOLERANCE,
     NumericalIK,
@@ -475,7 +475,7 @@ def test_numerical_ik_entry_points(solvers):
     by_urdf = numerical_ik(PANDA_URDF, T[0], tip=PANDA_TIP)
     position, rotation = oracle_pose_errors(solvers["panda"].reference, by_urdf.q[0], T[0])
     assert position[0] <= DEFAULT_TOLERANCE and rotation[0] <= DEFAULT_TOLERANCE
-    with pytest.raises(IKInputError, match="tip"):
+    with pytest.raises(InputError, match="tip"):
         numerical_ik(PANDA_URDF, T[0])
 
 
@@ -489,9 +489,9 @@ def test_solve_batch(solvers):
     seeded, seeded_valid = ik.solve_batch(T, Q_true)
     assert seeded_valid.all()
     np.testing.assert_allclose(seeded[:, 0], Q_true, atol=1e-6)
-    with pytest.raises(IKInputError, match="q_seed"):
+    with pytest.raises(InputError, match="q_seed"):
         ik.solve_batch(T, np.zeros((3, 6)))
-    with pytest.raises(IKInputError, match="targets"):
+    with pytest.raises(InputError, match="targets"):
         ik.solve_batch(np.zeros(4))
 
 
@@ -541,18 +541,18 @@ def test_textbook_methods_reach_exact_solutions(solvers):
     (np.eye(4), {"rng": "seven"}, "rng"),
 ])
 def test_bad_input_raises(solvers, target, options, message):
-    with pytest.raises(IKInputError, match=message):
+    with pytest.raises(InputError, match=message):
         solvers["ur5"].solve(target, **options)
 
 
 def test_bad_settings_and_limits_raise(solvers):
-    with pytest.raises(IKInputError, match="nullspace_gain"):
+    with pytest.raises(InputError, match="nullspace_gain"):
         SolverSettings(nullspace_gain=2.0).checked()
-    with pytest.raises(IKInputError, match="damping"):
+    with pytest.raises(InputError, match="damping"):
         SolverSettings(method="dls", damping=0.0).checked()
-    with pytest.raises(IKInputError, match="lower <= upper"):
+    with pytest.raises(InputError, match="lower <= upper"):
         NumericalIK(solvers["ur5"].reference, np.ones(6), np.zeros(6))
-    with pytest.raises(IKInputError, match="q_start"):
+    with pytest.raises(InputError, match="q_start"):
         solvers["ur5"].descend(np.eye(4), [0.0] * 7)
     with pytest.raises(dhkin.URDFError, match="no such URDF"):
         NumericalIK.from_urdf("/nonexistent/arm.urdf", "tool0")

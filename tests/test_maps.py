@@ -19,6 +19,7 @@ import pytest
 from numpy.typing import NDArray
 
 import dhkin
+from dhkin.errors import FamilyError, InputError
 from dhkin.maps import (
     DPI,
     FIGURE_SIZE,
@@ -32,7 +33,6 @@ from dhkin.maps import (
 )
 from dhkin.singularity import (
     DEFAULT_THRESHOLDS,
-    SingularityError,
     SingularityModel,
     singularity_model,
     singularity_report,
@@ -416,17 +416,17 @@ def test_progress_bar_on_request(capsys, load_robot) -> None:
     ({"offset": float("nan")}, "offset: expected a finite distance"),
 ])
 def test_bad_workspace_arguments(kwargs, message, load_robot) -> None:
-    with pytest.raises(SingularityError, match=message):
+    with pytest.raises(InputError, match=message):
         workspace_slice(load_robot("ur5"), **kwargs)
 
 
 def test_bad_output_and_joint_arguments(tmp_path, load_robot) -> None:
     robot = load_robot("ur5")
-    with pytest.raises(SingularityError, match=r"expected a \.png file name"):
+    with pytest.raises(InputError, match=r"expected a \.png file name"):
         draw_maps(robot, tmp_path / "map.jpg")
-    with pytest.raises(SingularityError, match="does not exist"):
+    with pytest.raises(InputError, match="does not exist"):
         draw_maps(robot, tmp_path / "missing" / "map.png")
-    with pytest.raises(SingularityError, match="two different joint numbers"):
+    with pytest.raises(InputError, match="two different joint numbers"):
         joint_slice(robot, (3, 3))
-    with pytest.raises(SingularityError, match="no analytic singularity family"):
+    with pytest.raises(FamilyError, match="no analytic singularity family"):
         workspace_slice(load_robot("planar_2r"))

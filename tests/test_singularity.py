@@ -22,12 +22,11 @@ import pytest
 from numpy.typing import NDArray
 
 import dhkin
-from dhkin.errors import DhkinError
+from dhkin.errors import DhkinError, FamilyError, InputError
 from dhkin.singularity import (
     DEFAULT_THRESHOLDS,
     KINDS,
     MOVING_JOINT,
-    SingularityError,
     Thresholds,
     add_singularity_arguments,
     cli_singularity,
@@ -82,7 +81,7 @@ def placed(robot: dhkin.Robot, kind: str, n: int, rng: np.random.Generator,
     for _ in range(50 * n):
         try:
             q = model.place(robot.table.random_q(1, rng)[0], kind)
-        except SingularityError:
+        except InputError:
             continue
         factors = model.factors(q)
         if all(factors.distance(other)[0] >= clearance for other in model.kinds if other != kind) \
@@ -328,19 +327,19 @@ def test_report_at_a_double_singularity_names_both(load_robot) -> None:
 def test_thresholds_validation_and_mapping() -> None:
     assert Thresholds() == DEFAULT_THRESHOLDS
     for bad in (-1.0, float("nan"), "x", True):
-        with pytest.raises(SingularityError, match=r"thresholds\.wrist"):
+        with pytest.raises(InputError, match=r"thresholds\.wrist"):
             Thresholds(wrist=bad)
 
 
 @pytest.mark.parametrize("bad_q", [[0.0] * 5, [0.0, 0.0, float("nan"), 0.0, 0.0, 0.0],
                                    [[0.0] * 6]])
 def test_bad_q_is_a_dhkin_error_naming_the_value(bad_q, load_robot) -> None:
-    with pytest.raises(SingularityError, match=r"q: expected 6 finite joint values"):
+    with pytest.raises(InputError, match=r"q: expected 6 finite joint values"):
         singularity_report(load_robot("ur5"), bad_q)
 
 
 def test_unknown_threshold_kind_is_an_error(load_robot) -> None:
-    with pytest.raises(SingularityError, match=r"unknown kind 'knee'"):
+    with pytest.raises(InputError, match=r"unknown kind 'knee'"):
         singularity_report(load_robot("ur5"), np.zeros(6), {"knee": 1e-3})
 
 
@@ -360,13 +359,43 @@ def test_a_six_axis_table_outside_the_families_names_the_failed_conditions(load_
     joints = list(table.joints)
     joints[4] = dataclasses.replace(joints[4], a=0.01)
     broken = dhkin.Robot(dataclasses.replace(table, joints=tuple(joints)))
-    with pytest.raises(SingularityError, match=r"axes 5 and 6 are 0\.01 m apart") as caught:
+    with pytest.raises(FamilyError, match=r"axes 5 and 6 meet \(distance\): 0\.01 m") as caught:
         singularity_model(broken)
-    assert "axes 2, 3 and 4 are not parallel" in str(caught.value)
+    assert "axes 3 and 4 parallel" in str(caught.value)
+    assert set(caught.value.value) == {"spherical_wrist", "offset_wrist", "stanford"}
+
+
+@pytest.mark.parametrize("tilt, in_family", [(0.01, True), (math.radians(10.0), False)],
+                         ids=["within the band", "oblique shoulder"])
+def test_ik_singularity_analysis_and_maps_agree_on_the_family(tilt: float, in_family: bool,
+                                                              load_robot) -> None:
+    """Axis 2 tilted from perpendicular to axis 1 (alpha1 off 90 deg): 0.01 rad is within the
+    family band (the IK refines on the exact chain), 10 deg is an oblique shoulder, which no
+    family's closed form covers. IK, singularity analysis and maps decide alike."""
+    import dataclasses
+
+    from dhkin.maps import workspace_slice
+
+    table = load_robot("abb_irb1200_7_70").table
+    joints = list(table.joints)
+    joints[0] = dataclasses.replace(joints[0], alpha=joints[0].alpha + tilt)
+    robot = dhkin.Robot(dataclasses.replace(table, joints=tuple(joints)))
+    assert robot.has_closed_form == in_family
+    if in_family:
+        assert singularity_model(robot).family == robot.ik_solver.family == "spherical_wrist"
+        report = singularity_report(robot, np.full(6, 0.3))
+        assert report.family == "spherical_wrist"
+        return
+    with pytest.raises(FamilyError):
+        robot.ik_solver  # noqa: B018 (the property raises)
+    with pytest.raises(FamilyError, match="no analytic singularity family"):
+        singularity_model(robot)
+    with pytest.raises(FamilyError):
+        workspace_slice(robot, resolution=8)
 
 
 def test_place_refuses_a_kind_the_family_does_not_have(load_robot) -> None:
-    with pytest.raises(SingularityError, match="'elbow'"):
+    with pytest.raises(InputError, match="'elbow'"):
         singularity_model(load_robot("stanford_arm")).place(np.full(6, 0.5), "elbow")
 
 
@@ -415,3 +444,17 @@ def test_cli_thresholds_and_json(capsys) -> None:
 def test_cli_wrong_number_of_values_is_a_dhkin_error(capsys) -> None:
     with pytest.raises(DhkinError, match="ur5 has 6 joints, got 3 values"):
         run_cli(capsys, "ur5", "1", "2", "3")
+
+
+@pytest.mark.parametrize("name", dhkin.builtin_names())
+def test_every_built_in_robot_is_in_the_same_family_for_ik_and_singularities(name: str,
+                                                                              load_robot) -> None:
+    """Refined tables (rounded vendor constants, a calibrated UR5e) included: one decision."""
+    robot = load_robot(name)
+    if not robot.has_closed_form:
+        with pytest.raises(FamilyError):
+            singularity_model(robot)
+        return
+    model = singularity_model(robot)
+    assert model.family == robot.ik_solver.family
+    assert model.exact_table is robot.table

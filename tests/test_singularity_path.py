@@ -21,9 +21,9 @@ import pytest
 from numpy.typing import NDArray
 
 import dhkin
+from dhkin.errors import InputError, UnreachableError
 from dhkin.singularity import (
     GRAZE_THRESHOLDS,
-    SingularityError,
     analyse_path,
     joint_axes,
     line_poses,
@@ -193,20 +193,21 @@ def test_unreachable_pose_is_named(load_robot) -> None:
     poses = np.repeat(np.eye(4)[None], 3, axis=0)
     poses[2, :3, 3] = (5.0, 0.0, 0.0)
     poses[:2, :3, 3] = (0.4, 0.1, 0.3)
-    with pytest.raises(SingularityError, match=r"poses\[2\]: no IK solution"):
+    with pytest.raises(UnreachableError, match=r"poses\[2\]: no IK solution") as caught:
         analyse_path(robot, poses)
+    assert (caught.value.field, caught.value.index) == ("poses", 2)
 
 
 @pytest.mark.parametrize("bad", [np.zeros((5, 5)), np.zeros((2, 6)), np.zeros((4, 3, 3))])
 def test_bad_path_shapes_are_dhkin_errors(bad, load_robot) -> None:
-    with pytest.raises(SingularityError, match="path: expected"):
+    with pytest.raises(InputError, match="path: expected"):
         analyse_path(load_robot("ur5"), bad)
 
 
 def test_bad_line_poses_arguments() -> None:
-    with pytest.raises(SingularityError, match="n: expected an integer >= 2"):
+    with pytest.raises(InputError, match="n: expected an integer >= 2"):
         line_poses(np.eye(4), np.eye(4), 1)
     flipped = np.eye(4)
     flipped[:3, :3] = rotation_about(np.array([1.0, 0.0, 0.0]), math.pi)
-    with pytest.raises(SingularityError, match="half a turn apart"):
+    with pytest.raises(InputError, match="half a turn apart"):
         line_poses(np.eye(4), flipped, 10)

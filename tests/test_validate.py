@@ -18,6 +18,7 @@ import pinocchio as pin
 import pytest
 
 import dhkin
+from dhkin.errors import InputError
 from dhkin.reference import Reference
 from dhkin.transforms import invert, pose_error
 from dhkin.validate import (
@@ -26,7 +27,6 @@ from dhkin.validate import (
     OUTCOMES,
     SEED_PERTURBATION,
     ReferenceSpec,
-    ValidationInputError,
     adapt,
     load_ik,
     perturbed_seeds,
@@ -160,7 +160,7 @@ def test_rounded_urdf_rounds_every_number(ur5: dhkin.Robot) -> None:
     assert 0 < deviation < 1e-8
     coarse = Reference(rounded_urdf(exact, digits=3)).fk(q)
     assert pose_error(coarse, Reference(exact).fk(q))[1].max() > 1e-4
-    with pytest.raises(ValidationInputError, match="digits"):
+    with pytest.raises(InputError, match="digits"):
         rounded_urdf(exact, digits=0)
 
 
@@ -413,36 +413,36 @@ def test_rates_add_up(ur5: dhkin.Robot) -> None:
 
 
 def test_bad_arguments_are_clear_errors(ur5: dhkin.Robot, tmp_path) -> None:
-    with pytest.raises(ValidationInputError, match="module:function"):
+    with pytest.raises(InputError, match="module:function"):
         load_ik("tests.broken.sign_flip")
-    with pytest.raises(ValidationInputError, match="cannot import module"):
+    with pytest.raises(InputError, match="cannot import module"):
         load_ik("no_such_module_xyz:ik")
-    with pytest.raises(ValidationInputError, match="no callable"):
+    with pytest.raises(InputError, match="no callable"):
         load_ik("tests.broken:no_such_function")
-    with pytest.raises(ValidationInputError, match="n: expected at least 1 sample"):
+    with pytest.raises(InputError, match="n: expected at least 1 sample"):
         validate(ur5, n=0)
-    with pytest.raises(ValidationInputError, match=r"reference \(--reference\).*no_such"):
+    with pytest.raises(InputError, match=r"reference \(--reference\).*no_such"):
         validate(ur5, n=5, reference=tmp_path / "no_such.urdf")
-    with pytest.raises(ValidationInputError, match=r"tip \(--tip\).*no frame named 'nowhere'"):
+    with pytest.raises(InputError, match=r"tip \(--tip\).*no frame named 'nowhere'"):
         validate(ur5, n=5, reference=UR5_VENDOR, tip="nowhere")
-    with pytest.raises(ValidationInputError, match=r"base \(--base\).*no frame named 'floor'"):
+    with pytest.raises(InputError, match=r"base \(--base\).*no frame named 'floor'"):
         validate(ur5, n=5, reference=UR5_VENDOR, base="floor")
-    with pytest.raises(ValidationInputError, match="5 actuated joints"):
+    with pytest.raises(InputError, match="5 actuated joints"):
         validate(ur5, n=5, reference=UR5_VENDOR, tip="wrist_2_link")
-    with pytest.raises(ValidationInputError, match="vendor URDF reference only"):
+    with pytest.raises(InputError, match="vendor URDF reference only"):
         validate(ur5, n=5, reference="exact", tip="tool0")
     not_urdf = tmp_path / "not.urdf"
     not_urdf.write_text("<robot")
-    with pytest.raises(ValidationInputError, match=r"reference \(--reference\)"):
+    with pytest.raises(InputError, match=r"reference \(--reference\)"):
         validate(ur5, n=5, reference=not_urdf)
     bad = tmp_path / "bad.json"
     bad.write_text("{}")
-    with pytest.raises(ValidationInputError, match="not a dhkin failure file"):
+    with pytest.raises(InputError, match="not a dhkin failure file"):
         replay(ur5, broken.sign_flip, bad)
     bad.write_text(json.dumps({"robot": "ur5", "tolerance": 1e-9, "joint_tolerance": 1e-6,
                                "reference": {"kind": "nonsense"},
                                "failures": [{"q_sampled": [0] * 6, "sample_set": "uniform"}]}))
-    with pytest.raises(ValidationInputError, match="reference"):
+    with pytest.raises(InputError, match="reference"):
         replay(ur5, broken.sign_flip, bad)
 
 

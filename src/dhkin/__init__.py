@@ -1,10 +1,22 @@
 """dhkin: kinematics of 6-axis industrial arms from DH tables, validated against Pinocchio.
 
-``dhkin.load(name_or_path)`` returns a :class:`~dhkin.robot.Robot`; see DESIGN.md for the contracts.
+``dhkin.load(name_or_path)`` returns a :class:`~dhkin.robot.Robot`. Errors: :mod:`dhkin.errors`
+(one class per fault, all exported here).
 """
 
 from dhkin.dh import DHTable, Joint, load_table, parse_table, table_to_yaml, write_table
-from dhkin.errors import DHError, DhkinError, FamilyError, RobotNotFoundError, URDFError
+from dhkin.errors import (
+    DHError,
+    DhkinError,
+    FamilyError,
+    IKInputError,
+    InputError,
+    RobotNotFoundError,
+    SingularityError,
+    UnreachableError,
+    URDFError,
+    ValidationInputError,
+)
 from dhkin.fit import fit_corrections
 from dhkin.robot import Robot, builtin_names, load
 
@@ -13,10 +25,15 @@ __all__ = [
     "DHTable",
     "DhkinError",
     "FamilyError",
+    "IKInputError",
+    "InputError",
     "Joint",
     "Robot",
     "RobotNotFoundError",
+    "SingularityError",
     "URDFError",
+    "UnreachableError",
+    "ValidationInputError",
     "builtin_names",
     "fit_corrections",
     "load",

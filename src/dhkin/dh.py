@@ -34,7 +34,7 @@ import numpy as np
 import yaml
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.errors import DHError
+from dhkin.errors import DHError, InputError
 from dhkin.transforms import rot_y, rot_z, xyz_rpy_to_matrix
 
 Convention = Literal["standard", "modified"]
@@ -236,9 +236,10 @@ def _as_batch(q: ArrayLike, dof: int) -> NDArray[np.float64]:
     if Q.ndim == 1:
         Q = Q[None, :]
     if Q.ndim != 2 or Q.shape[1] != dof:
-        raise DHError(f"q: expected shape ({dof},) or (N, {dof}), got {np.shape(q)}")
+        raise InputError(field="q", value=np.shape(q), expected=f"shape ({dof},) or (N, {dof})")
     if not np.all(np.isfinite(Q)):
-        raise DHError("q: expected finite joint values, got NaN or inf")
+        raise InputError("q: expected finite joint values, got NaN or inf", field="q",
+                         expected="finite joint values")
     return Q
 
 

@@ -1,14 +1,63 @@
-"""Exceptions raised by dhkin.
+"""Exceptions raised by dhkin, one class per fault.
 
-Every error dhkin raises on bad input derives from :class:`DhkinError`, so callers can catch one
-type. Messages name the file, the field or the value at fault and say what was expected.
+Every error dhkin raises derives from :class:`DhkinError`, so callers can catch one type. The
+class says *whose* fault it is, whatever the entry point:
+
+==========================  ==============================================================
+:class:`InputError`         an argument of a call is wrong (shape, type, range, a choice
+                            among names): joint values, poses, seeds, tolerances, options
+:class:`DHError`            a DH table (file or object) is invalid
+:class:`URDFError`          a robot description (URDF, xacro) cannot be used as asked
+:class:`RobotNotFoundError` a name is neither a built-in robot nor a table file
+:class:`FamilyError`        a table lacks the structure a family needs (closed-form IK,
+                            analytic singularity factors)
+:class:`UnreachableError`   what was asked does not exist for this robot: a singularity
+                            its joint cannot reach within the limits, a path pose with no
+                            IK solution
+==========================  ==============================================================
+
+Each error carries the parts of its message as attributes, None where they do not apply:
+``field`` (the argument, table field or file entry at fault, e.g. "q_seed" or "joints[2].a"),
+``value`` (what was given, or its shape), ``expected`` (what was expected, in words) and
+``index`` (the pose or row of a batch at fault). Code that reacts to an error reads these,
+never the message. The message names the file, field or value at fault and what was expected.
+
+``IKInputError``, ``SingularityError`` and ``ValidationInputError`` are the names of
+:class:`InputError` in earlier versions, kept so that existing ``except`` clauses still work.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class DhkinError(Exception):
-    """Base class of all dhkin errors."""
+    """Base class of all dhkin errors (see the module docstring for the attributes)."""
+
+    def __init__(self, message: str | None = None, *, field: str | None = None,
+                 value: Any = None, expected: str | None = None,
+                 index: int | None = None) -> None:
+        if message is None:
+            message = describe(field, value, expected, index)
+        super().__init__(message)
+        self.field = field
+        self.value = value
+        self.expected = expected
+        self.index = index
+
+
+def describe(field: str | None, value: Any, expected: str | None,
+             index: int | None = None) -> str:
+    """The standard message "field[index]: expected ..., got ..." from its parts."""
+    where = field or "input"
+    if index is not None:
+        where += f"[{index}]"
+    text = f"{where}: expected {expected}" if expected else where
+    return f"{text}, got {value!r}" if value is not None else text
+
+
+class InputError(DhkinError, ValueError):
+    """An argument of a call is wrong: its shape, type, range or choice."""
 
 
 class DHError(DhkinError, ValueError):
@@ -24,8 +73,21 @@ class RobotNotFoundError(DhkinError, LookupError):
 
 
 class FamilyError(DhkinError, ValueError):
-    """A DH table does not fit the closed-form IK family that was asked for."""
+    """A DH table lacks the structure of the family asked for (closed-form IK, analytic
+    singularity factors)."""
 
 
-class IKInputError(DhkinError, ValueError):
-    """An IK call got an input of the wrong shape or a non-finite value."""
+class UnreachableError(DhkinError, ValueError):
+    """What was asked does not exist for this robot (a singularity out of the joint's reach, a
+    pose without an IK solution)."""
+
+
+#: Earlier names of :class:`InputError` (see the module docstring).
+IKInputError = InputError
+SingularityError = InputError
+ValidationInputError = InputError
+
+#: Every error class, for ``from dhkin.errors import *`` users and for the package's exports.
+__all__ = ["DHError", "DhkinError", "FamilyError", "IKInputError", "InputError",
+           "RobotNotFoundError", "SingularityError", "URDFError", "UnreachableError",
+           "ValidationInputError", "describe"]

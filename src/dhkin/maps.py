@@ -46,10 +46,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
+from dhkin.errors import InputError
 from dhkin.singularity import (
     DEFAULT_THRESHOLDS,
     KINDS,
-    SingularityError,
     SingularityModel,
     cli_joint_values,
     singularity_model,
@@ -242,20 +242,20 @@ def workspace_slice(robot: Robot, plane: str = "xz", offset: float = 0.0,
     :func:`default_extent`). ``progress`` shows a tqdm bar on stderr.
     """
     if plane not in PLANES:
-        raise SingularityError(f"plane: expected one of {list(PLANES)}, got {plane!r}")
+        raise InputError(f"plane: expected one of {list(PLANES)}, got {plane!r}", field="plane")
     _check_resolution(resolution)
     model = singularity_model(robot)
     if rpy is None:
         rpy = DEFAULT_RPY[model.family]
     rpy_values = tuple(float(x) for x in np.asarray(rpy, dtype=float).reshape(-1))
     if len(rpy_values) != 3 or not all(math.isfinite(x) for x in rpy_values):
-        raise SingularityError(f"rpy: expected 3 finite angles (rad), got {rpy!r}")
+        raise InputError(f"rpy: expected 3 finite angles (rad), got {rpy!r}", field="rpy")
     if not math.isfinite(offset):
-        raise SingularityError(f"offset: expected a finite distance (m), got {offset!r}")
+        raise InputError(f"offset: expected a finite distance (m), got {offset!r}", field="offset")
     (u0, u1), (v0, v1) = extent if extent is not None else default_extent(robot, plane)
     if not (u0 < u1 and v0 < v1):
-        raise SingularityError(f"extent: expected ((u0, u1), (v0, v1)) with u0 < u1 and "
-                               f"v0 < v1, got {extent!r}")
+        raise InputError(f"extent: expected ((u0, u1), (v0, v1)) with u0 < u1 and "
+                         f"v0 < v1, got {extent!r}", field="extent")
     u = np.linspace(u0, u1, resolution)
     v = np.linspace(v0, v1, resolution)
     uu, vv = np.meshgrid(u, v)
@@ -311,8 +311,8 @@ def workspace_slice(robot: Robot, plane: str = "xz", offset: float = 0.0,
 def _check_resolution(resolution: int) -> None:
     if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) \
             or not 8 <= resolution <= 2000:
-        raise SingularityError(f"resolution: expected an integer from 8 to 2000, "
-                               f"got {resolution!r}")
+        raise InputError(f"resolution: expected an integer from 8 to 2000, "
+                         f"got {resolution!r}", field="resolution")
 
 
 def _boundary_cells(reachable: Mask) -> Mask:
@@ -569,12 +569,12 @@ def joint_slice(robot: Robot, joints: tuple[int, int] = (2, 3), q_fixed: ArrayLi
     model = singularity_model(robot)
     if len(joints) != 2 or len(set(joints)) != 2 or not all(
             isinstance(j, (int, np.integer)) and 1 <= j <= robot.dof for j in joints):
-        raise SingularityError(f"joints: expected two different joint numbers 1..{robot.dof}, "
-                               f"got {joints!r}")
+        raise InputError(f"joints: expected two different joint numbers 1..{robot.dof}, "
+                         f"got {joints!r}", field="joints")
     fixed = default_fixed_q(robot) if q_fixed is None else np.asarray(q_fixed, dtype=float)
     if fixed.shape != (robot.dof,) or not np.all(np.isfinite(fixed)):
-        raise SingularityError(f"q_fixed: expected {robot.dof} finite joint values, got "
-                               f"{np.asarray(q_fixed).tolist()!r}")
+        raise InputError(f"q_fixed: expected {robot.dof} finite joint values, got "
+                         f"{np.asarray(q_fixed).tolist()!r}", field="q_fixed")
     first, second = joints[0] - 1, joints[1] - 1
     u = np.linspace(*_slice_range(robot.table, first), resolution)
     v = np.linspace(*_slice_range(robot.table, second), resolution)
@@ -639,9 +639,9 @@ def draw_maps(robot: Robot, output: str | Path, plane: str = "xz", offset: float
 
     path = Path(output)
     if path.suffix.lower() != ".png":
-        raise SingularityError(f"output: expected a .png file name, got {str(output)!r}")
+        raise InputError(f"output: expected a .png file name, got {str(output)!r}", field="output")
     if not path.parent.exists():
-        raise SingularityError(f"output: folder {str(path.parent)!r} does not exist")
+        raise InputError(f"output: folder {str(path.parent)!r} does not exist", field="output")
     workspace = workspace_slice(robot, plane, offset, rpy, resolution=resolution,
                                 progress=progress)
     slices = (joint_slice(robot, (2, 3), q_fixed, joint_resolution),

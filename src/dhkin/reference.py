@@ -19,7 +19,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.errors import URDFError
+from dhkin.errors import InputError, URDFError
 
 ReferenceFrameName = Literal["local", "world", "local_world_aligned"]
 REFERENCE_FRAMES: dict[str, pin.ReferenceFrame] = {
@@ -124,8 +124,9 @@ class Reference:
         single = Q.ndim == 1
         Q = np.atleast_2d(Q)
         if Q.ndim != 2 or Q.shape[1] != self.dof:
-            raise URDFError(f"{self.source}: expected {self.dof} joint values for the chain "
-                            f"{self.joint_names}, got shape {np.shape(q)}")
+            raise InputError(f"q ({self.source}): expected {self.dof} joint values for the "
+                             f"chain {self.joint_names}, got shape {np.shape(q)}", field="q",
+                             value=np.shape(q), expected=f"{self.dof} joint values")
         out = np.empty((Q.shape[0], 4, 4))
         model, data = self.model, self.data
         for k, row in enumerate(Q):

@@ -209,7 +209,7 @@ class Robot:
         ``distances`` (|sin q5|, metres); the analytic det J factored into shoulder x elbow x
         wrist terms; Pinocchio's ``sigma_min``, singular values, Yoshikawa measures and
         condition. ``thresholds`` default to dhkin.singularity.DEFAULT_THRESHOLDS, or override
-        some kinds: {"wrist": 1e-3}. SingularityError outside the closed-form families. See
+        some kinds: {"wrist": 1e-3}. FamilyError outside the closed-form families. See
         docs/singularities.md.
         """
         from dhkin.singularity import singularity_report

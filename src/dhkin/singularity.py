@@ -69,9 +69,15 @@ threshold (:data:`DEFAULT_THRESHOLDS`: 1e-4 for |sin q5|, 1e-4 m for the others,
 analysis uses the wider :data:`GRAZE_THRESHOLDS` to report near misses. Both can be set.
 
 The numbers that come from Pinocchio (the oracle) are the singular values of the
-LOCAL_WORLD_ALIGNED Jacobian at tool0, sigma_min, condition and the Yoshikawa measures. A table
-outside the three families gets a :class:`SingularityError` naming the structural conditions it
-fails; its numerical measures remain available from ``robot.reference().manipulability(q)``.
+LOCAL_WORLD_ALIGNED Jacobian at tool0, sigma_min, condition and the Yoshikawa measures.
+
+**Which family**: the family registry decides (:func:`dhkin.ik.family.fit_family`, the decision
+the closed-form IK and the maps use too): a table is in a family within the family's band
+(rounded constants, calibration), and its factors are those of the family's ideal model (the
+table with the band's deviations snapped off; it differs from the exact chain by at most the
+fit's model deviation, and the Pinocchio numbers of a report come from the exact chain). A table
+outside every family gets a :class:`~dhkin.errors.FamilyError` naming the structural conditions
+it fails; its numerical measures remain available from ``robot.reference().manipulability(q)``.
 """
 
 from __future__ import annotations
@@ -87,7 +93,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
-from dhkin.errors import DhkinError
+from dhkin.errors import FamilyError, InputError, UnreachableError
+from dhkin.ik.family import EXACT_RELATIVE, FamilyFit, fit_family
+from dhkin.ik.geometry import table_scale
 from dhkin.transforms import rotation_angle
 
 if TYPE_CHECKING:
@@ -98,14 +106,8 @@ KINDS: tuple[str, ...] = ("wrist", "elbow", "shoulder")
 DISTANCE_UNITS: dict[str, str] = {"wrist": "|sin q5|", "elbow": "m", "shoulder": "m"}
 #: The joint (1-based) whose value moves a configuration onto / off each singularity.
 MOVING_JOINT: dict[str, int] = {"wrist": 5, "elbow": 3, "shoulder": 2}
-#: Structural tolerance: |sin| or |cos| of angles between axes, and metres times the table scale.
-STRUCTURE_TOLERANCE = 1e-9
 
 Array = NDArray[np.float64]
-
-
-class SingularityError(DhkinError, ValueError):
-    """Singularity analysis cannot be done as asked (bad input, table outside the families)."""
 
 
 @dataclass(frozen=True)
@@ -125,13 +127,13 @@ class Thresholds:
             value = getattr(self, kind)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
                     or not math.isfinite(value) or value < 0:
-                raise SingularityError(f"thresholds.{kind}: expected a finite number >= 0, "
-                                       f"got {value!r}")
+                raise InputError(f"thresholds.{kind}: expected a finite number >= 0, "
+                                 f"got {value!r}")
 
     def of(self, kind: str) -> float:
         """The threshold of one kind ("wrist", "elbow" or "shoulder")."""
         if kind not in KINDS:
-            raise SingularityError(f"kind: expected one of {list(KINDS)}, got {kind!r}")
+            raise InputError(f"kind: expected one of {list(KINDS)}, got {kind!r}", field="kind")
         return float(getattr(self, kind))
 
 
@@ -152,12 +154,12 @@ def as_thresholds(value: Thresholds | Mapping[str, float] | None,
     if isinstance(value, Thresholds):
         return value
     if not isinstance(value, Mapping):
-        raise SingularityError(f"thresholds: expected Thresholds or a mapping of {list(KINDS)} "
-                               f"to numbers, got {value!r}")
+        raise InputError(f"thresholds: expected Thresholds or a mapping of {list(KINDS)} "
+                         f"to numbers, got {value!r}", field="thresholds")
     unknown = [k for k in value if k not in KINDS]
     if unknown:
-        raise SingularityError(f"thresholds: unknown kind {unknown[0]!r}; expected keys among "
-                               f"{list(KINDS)}")
+        raise InputError(f"thresholds: unknown kind {unknown[0]!r}; expected keys among "
+                         f"{list(KINDS)}", field="thresholds")
     merged = {kind: value.get(kind, default.of(kind)) for kind in KINDS}
     return Thresholds(**merged)
 
@@ -200,7 +202,7 @@ class Factors:
             return self.elbow_distance
         if kind == "shoulder":
             return self.shoulder_distance
-        raise SingularityError(f"kind: expected one of {list(KINDS)}, got {kind!r}")
+        raise InputError(f"kind: expected one of {list(KINDS)}, got {kind!r}", field="kind")
 
     def signed(self, kind: str) -> Array:
         """The signed factor whose zero is that singularity, (N,)."""
@@ -210,7 +212,7 @@ class Factors:
             return self.elbow
         if kind == "shoulder":
             return self.shoulder
-        raise SingularityError(f"kind: expected one of {list(KINDS)}, got {kind!r}")
+        raise InputError(f"kind: expected one of {list(KINDS)}, got {kind!r}", field="kind")
 
     def __getitem__(self, index: int | slice | NDArray[np.int64]) -> Factors:
         return Factors(self.family, *(np.atleast_1d(getattr(self, name)[index]) for name in
@@ -248,118 +250,8 @@ def _closest_point(p1: Array, z1: Array, p2: Array, z2: Array) -> Array:
     return 0.5 * ((p1 + t1[..., None] * z1) + (p2 + t2[..., None] * z2))
 
 
-def _line_distance(p1: Array, z1: Array, p2: Array, z2: Array) -> float:
-    """Distance between two lines (m)."""
-    normal = np.cross(z1, z2)
-    norm = float(np.linalg.norm(normal))
-    if norm < STRUCTURE_TOLERANCE:
-        return float(np.linalg.norm(np.cross(p2 - p1, z1)))
-    return abs(float(np.dot(p2 - p1, normal))) / norm
-
-
-def _point_line_distance(point: Array, p: Array, z: Array) -> float:
-    return float(np.linalg.norm(np.cross(point - p, z)))
-
-
-def _scale(table: DHTable) -> float:
-    """Length scale of a table (m): sum of |a|, |d| and prismatic strokes."""
-    total = sum(abs(j.a) + abs(j.d) + (0.0 if j.is_revolute else
-                                       max(abs(j.lower), abs(j.upper)) + abs(j.offset))
-                for j in table.joints)
-    return max(total, 1e-3)
-
-
 # --------------------------------------------------------------------------------------------
 # Structure: which family, closed form or geometric
-
-
-@dataclass(frozen=True)
-class _Fit:
-    family: str
-    problems: tuple[str, ...]
-
-
-def _structure_problems(table: DHTable) -> dict[str, list[str]]:
-    """For each family, the structural conditions the table fails (empty list: it fits)."""
-    if table.dof != 6:
-        reason = f"expected 6 joints, got {table.dof}"
-        return {family: [reason] for family in ("spherical_wrist", "offset_wrist", "stanford")}
-    points, axes = joint_axes(table, np.zeros(6))
-    o, z = points[0], axes[0]
-    tol = STRUCTURE_TOLERANCE
-    length_tol = STRUCTURE_TOLERANCE * _scale(table)
-    types = [j.type for j in table.joints]
-
-    def parallel(i: int, k: int) -> bool:
-        return float(np.linalg.norm(np.cross(z[i - 1], z[k - 1]))) <= tol
-
-    def perpendicular(i: int, k: int) -> bool:
-        return abs(float(np.dot(z[i - 1], z[k - 1]))) <= tol
-
-    def distance(i: int, k: int) -> float:
-        return _line_distance(o[i - 1], z[i - 1], o[k - 1], z[k - 1])
-
-    def meet(i: int, k: int, problems: list[str]) -> Array | None:
-        """Where axes i and k meet, or None (and a problem) when they do not."""
-        if parallel(i, k):
-            problems.append(f"axes {i} and {k} are parallel; expected them to meet")
-            return None
-        if distance(i, k) > length_tol:
-            problems.append(f"axes {i} and {k} are {distance(i, k):.6g} m apart; expected "
-                            f"them to meet")
-            return None
-        return _closest_point(o[i - 1], z[i - 1], o[k - 1], z[k - 1])
-
-    def revolute(indices: Sequence[int], problems: list[str]) -> None:
-        for i in indices:
-            if types[i - 1] != "revolute":
-                problems.append(f"joint {i} is {types[i - 1]}; expected revolute")
-
-    def common_arm(problems: list[str]) -> None:
-        if parallel(1, 2):
-            problems.append("axes 1 and 2 are parallel; expected them not to be (else every "
-                            "configuration is singular)")
-
-    def wrist_centre(problems: list[str]) -> Array | None:
-        w45 = meet(4, 5, problems)
-        w56 = meet(5, 6, problems)
-        if w45 is not None and w56 is not None and np.linalg.norm(w45 - w56) > length_tol:
-            problems.append(f"axes 4, 5, 6 do not meet in one point (axis 4 meets 5 "
-                            f"{np.linalg.norm(w45 - w56):.6g} m from where 5 meets 6)")
-        return w45
-
-    spherical: list[str] = []
-    revolute(range(1, 7), spherical)
-    common_arm(spherical)
-    if not parallel(2, 3):
-        spherical.append("axes 2 and 3 are not parallel")
-    elif distance(2, 3) <= length_tol:
-        spherical.append("axes 2 and 3 coincide; expected an upper arm of non-zero length")
-    wrist_centre(spherical)
-
-    offset: list[str] = []
-    revolute(range(1, 7), offset)
-    common_arm(offset)
-    if not (parallel(2, 3) and parallel(3, 4)):
-        offset.append("axes 2, 3 and 4 are not parallel")
-    elif distance(2, 3) <= length_tol or distance(3, 4) <= length_tol:
-        offset.append("axes 2, 3, 4 are parallel but two of them coincide")
-    meet(5, 6, offset)
-
-    stanford: list[str] = []
-    revolute([1, 2, 4, 5, 6], stanford)
-    if types[2] != "prismatic":
-        stanford.append("joint 3 is revolute; expected prismatic")
-    common_arm(stanford)
-    w = wrist_centre(stanford)
-    if w is not None:
-        if _point_line_distance(w, o[2], z[2]) > length_tol:
-            stanford.append("the wrist centre is off the line of the prismatic joint 3")
-        elif not perpendicular(2, 3):
-            stanford.append("axis 2 is not perpendicular to joint 3's direction")
-        elif _line_distance(o[1], z[1], w, z[2]) > length_tol:
-            stanford.append("axis 2 does not meet the line of joint 3 through the wrist centre")
-    return {"spherical_wrist": spherical, "offset_wrist": offset, "stanford": stanford}
 
 
 def _closed_form_available(table: DHTable, family: str) -> bool:
@@ -367,13 +259,13 @@ def _closed_form_available(table: DHTable, family: str) -> bool:
     if table.convention != "standard":
         return False
     rows = table.joints
-    tol = STRUCTURE_TOLERANCE * _scale(table)
+    tol = EXACT_RELATIVE * table_scale(table)  # the family's exact-structure tolerance
 
     def zero(x: float) -> bool:
         return abs(x) <= tol
 
     def sin_zero(alpha: float) -> bool:
-        return abs(math.sin(alpha)) <= STRUCTURE_TOLERANCE
+        return abs(math.sin(alpha)) <= EXACT_RELATIVE
 
     if family == "spherical_wrist":
         return sin_zero(rows[1].alpha) and zero(rows[3].a) and zero(rows[4].a) \
@@ -383,22 +275,32 @@ def _closed_form_available(table: DHTable, family: str) -> bool:
             and zero(rows[4].a)
     return zero(rows[1].a) and zero(rows[2].a) and zero(rows[3].d) and zero(rows[3].a) \
         and zero(rows[4].a) and zero(rows[4].d) \
-        and abs(abs(math.sin(rows[1].alpha)) - 1.0) <= STRUCTURE_TOLERANCE
+        and abs(abs(math.sin(rows[1].alpha)) - 1.0) <= EXACT_RELATIVE
+
+
+def family_fit(table: DHTable) -> FamilyFit:
+    """The table's family, decided by the family registry (:func:`dhkin.ik.family.fit_family`,
+    the same decision as the closed-form IK's): an arm is in a family for IK, singularity
+    analysis and maps alike, or for none of them.
+
+    Raises FamilyError naming, per family, the conditions the table fails.
+    """
+    try:
+        return fit_family(table)
+    except FamilyError as exc:
+        failed = exc.value if isinstance(exc.value, dict) else {}
+        lines = "\n  ".join(f"{family}: " + "; ".join(problems)
+                            for family, problems in failed.items())
+        raise FamilyError(f"{table.name}: no analytic singularity family fits this table "
+                          f"(its numerical measures: robot.reference().manipulability(q)):"
+                          f"\n  {lines}", field="family", value=exc.value,
+                          expected=exc.expected) from exc
 
 
 def family_of(table: DHTable) -> str:
-    """The analytic family of a table: "spherical_wrist", "offset_wrist" or "stanford".
-
-    Raises SingularityError naming, per family, the conditions the table fails.
-    """
-    problems = _structure_problems(table)
-    for family, failed in problems.items():
-        if not failed:
-            return family
-    lines = "\n  ".join(f"{family}: " + "; ".join(failed) for family, failed in problems.items())
-    raise SingularityError(f"{table.name}: no analytic singularity family fits this table "
-                           f"(its numerical measures: robot.reference().manipulability(q)):"
-                           f"\n  {lines}")
+    """The analytic family of a table: "spherical_wrist", "offset_wrist" or "stanford"
+    (:func:`family_fit`)."""
+    return family_fit(table).family
 
 
 class SingularityModel:
@@ -410,9 +312,15 @@ class SingularityModel:
     """
 
     def __init__(self, table: DHTable) -> None:
-        self.table = table
-        self.family = family_of(table)
-        self.closed_form = _closed_form_available(table, self.family)
+        fit = family_fit(table)
+        #: The family's ideal model of the table (dhkin.ik.family): the factors are those of the
+        #: ideal structure; a table within the family's band (rounded constants, calibration)
+        #: differs from it by at most ``fit.model_deviation``, and Pinocchio's numbers in the
+        #: report come from the exact chain.
+        self.table = fit.ideal
+        self.exact_table = table
+        self.family = fit.family
+        self.closed_form = _closed_form_available(fit.ideal, self.family)
         self.kinds: tuple[str, ...] = (("wrist", "shoulder") if self.family == "stanford"
                                        else KINDS)
         self.directions = np.array([j.direction for j in table.joints], dtype=float)
@@ -426,9 +334,9 @@ class SingularityModel:
         if Q.ndim == 1:
             Q = Q[None]
         if Q.ndim != 2 or Q.shape[1] != 6:
-            raise SingularityError(f"q: expected shape (6,) or (N, 6), got {np.shape(q)}")
+            raise InputError(f"q: expected shape (6,) or (N, 6), got {np.shape(q)}", field="q")
         if not np.all(np.isfinite(Q)):
-            raise SingularityError("q: expected finite joint values, got NaN or inf")
+            raise InputError("q: expected finite joint values, got NaN or inf", field="q")
         return Q
 
     def factors(self, q: ArrayLike) -> Factors:
@@ -446,8 +354,8 @@ class SingularityModel:
     def closed_form_factors(self, q: ArrayLike) -> Factors:
         """The closed forms of the module docstring (standard DH tables of the family)."""
         if not self.closed_form:
-            raise SingularityError(f"{self.table.name}: no closed form for this table "
-                                   f"({self.table.convention} DH); use geometric_factors")
+            raise FamilyError(f"{self.table.name}: no closed form for this table "
+                              f"({self.table.convention} DH); use geometric_factors")
         Q = self._batch(q)
         theta, d = self.table.dh_parameters(Q)
         rows = self.table.joints
@@ -530,11 +438,12 @@ class SingularityModel:
         Every factor is a sinusoid ``A + B cos x + C sin x`` of the moving joint's value x (the
         part beyond that joint turns rigidly about its axis), so the roots are found in closed
         form; the root within the joint limits nearest the current value is taken.
-        SingularityError when the family has no such kind or no root lies within the limits.
+        InputError when the family has no such kind, UnreachableError when no root lies within
+        the limits.
         """
         if kind not in self.kinds:
-            raise SingularityError(f"kind: {self.table.name} ({self.family}) has the "
-                                   f"singularities {list(self.kinds)}, got {kind!r}")
+            raise InputError(f"kind: {self.table.name} ({self.family}) has the "
+                             f"singularities {list(self.kinds)}, got {kind!r}", field="kind")
         start = self._batch(q)[0]
         joint = MOVING_JOINT[kind] - 1
         probes = np.repeat(start[None], 3, axis=0)
@@ -546,8 +455,9 @@ class SingularityModel:
         C = f1 - A
         amplitude = math.hypot(B, C)
         if amplitude <= abs(A):
-            raise SingularityError(f"{self.table.name}: joint {joint + 1} cannot reach the "
-                                   f"{kind} singularity from q = {np.round(start, 6).tolist()}")
+            raise UnreachableError(f"{self.table.name}: joint {joint + 1} cannot reach the "
+                                   f"{kind} singularity from q = {np.round(start, 6).tolist()}",
+                                   field="q", value=start.tolist())
         phase = math.atan2(C, B)
         spread = math.acos(-A / amplitude)
         lower, upper = self.table.lower[joint], self.table.upper[joint]
@@ -558,16 +468,17 @@ class SingularityModel:
                 if lower <= value <= upper:
                     candidates.append(value)
         if not candidates:
-            raise SingularityError(f"{self.table.name}: the {kind} singularity needs joint "
+            raise UnreachableError(f"{self.table.name}: the {kind} singularity needs joint "
                                    f"{joint + 1} outside its limits from q = "
-                                   f"{np.round(start, 6).tolist()}")
+                                   f"{np.round(start, 6).tolist()}", field="q",
+                                   value=start.tolist())
         placed = start.copy()
         placed[joint] = min(candidates, key=lambda value: abs(value - start[joint]))
         return placed
 
 
 def singularity_model(robot_or_table: Robot | DHTable) -> SingularityModel:
-    """The analytic model of a robot or a table (SingularityError outside the families)."""
+    """The analytic model of a robot or a table (FamilyError outside the families)."""
     table = robot_or_table if isinstance(robot_or_table, DHTable) else robot_or_table.table
     return SingularityModel(table)
 
@@ -734,8 +645,8 @@ def singularity_report(robot: Robot, q: ArrayLike,
     model = singularity_model(robot)
     values = np.asarray(q, dtype=float)
     if values.shape != (robot.dof,) or not np.all(np.isfinite(values)):
-        raise SingularityError(f"q: expected {robot.dof} finite joint values, got "
-                               f"{np.asarray(q).tolist()!r}")
+        raise InputError(f"q: expected {robot.dof} finite joint values, got "
+                         f"{np.asarray(q).tolist()!r}", field="q")
     factors = model.factors(values)
     distances = {kind: float(factors.distance(kind)[0]) for kind in model.kinds}
     kinds = tuple(kind for kind in KINDS if kind in distances
@@ -837,9 +748,9 @@ def line_poses(start: ArrayLike, end: ArrayLike, n: int) -> Array:
     linearly interpolated, orientation turning uniformly about one axis (geodesic)."""
     T0, T1 = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
     if T0.shape != (4, 4) or T1.shape != (4, 4):
-        raise SingularityError(f"start, end: expected 4x4 poses, got {T0.shape} and {T1.shape}")
+        raise InputError(f"start, end: expected 4x4 poses, got {T0.shape} and {T1.shape}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise SingularityError(f"n: expected an integer >= 2, got {n!r}")
+        raise InputError(f"n: expected an integer >= 2, got {n!r}", field="n")
     relative = T0[:3, :3].T @ T1[:3, :3]
     angle = float(rotation_angle(relative))
     axis = np.array([relative[2, 1] - relative[1, 2], relative[0, 2] - relative[2, 0],
@@ -847,8 +758,8 @@ def line_poses(start: ArrayLike, end: ArrayLike, n: int) -> Array:
     norm = float(np.linalg.norm(axis))
     axis = axis / norm if norm > 1e-12 else np.array([0.0, 0.0, 1.0])
     if angle > math.pi - 1e-6:
-        raise SingularityError("start, end: orientations half a turn apart; the rotation axis "
-                               "is ambiguous, expected less than 180 deg between them")
+        raise InputError("start, end: orientations half a turn apart; the rotation axis "
+                         "is ambiguous, expected less than 180 deg between them")
     fractions = np.linspace(0.0, 1.0, n)
     poses = np.repeat(np.eye(4)[None], n, axis=0)
     K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
@@ -863,22 +774,24 @@ def line_poses(start: ArrayLike, end: ArrayLike, n: int) -> Array:
 def solve_pose_path(robot: Robot, poses: ArrayLike, q_start: ArrayLike | None = None) -> Array:
     """Joint path of a pose path: each pose solved by IK, taking the solution nearest to the
     previous one (the first: nearest to ``q_start``, default zeros) and the previous solution as
-    seed for a free joint at a singularity. SingularityError naming the first unreachable pose.
+    seed for a free joint at a singularity. UnreachableError naming the first unreachable pose
+    (its ``index``).
     """
     targets = np.asarray(poses, dtype=float)
     if targets.ndim != 3 or targets.shape[1:] != (4, 4):
-        raise SingularityError(f"poses: expected shape (M, 4, 4), got {targets.shape}")
+        raise InputError(f"poses: expected shape (M, 4, 4), got {targets.shape}", field="poses")
     previous = (np.zeros(robot.dof) if q_start is None
                 else np.asarray(q_start, dtype=float).reshape(-1))
     if previous.shape != (robot.dof,) or not np.all(np.isfinite(previous)):
-        raise SingularityError(f"q_start: expected {robot.dof} finite joint values, got "
-                               f"{np.asarray(q_start).tolist()!r}")
+        raise InputError(f"q_start: expected {robot.dof} finite joint values, got "
+                         f"{np.asarray(q_start).tolist()!r}", field="q_start")
     path = np.empty((len(targets), robot.dof))
     for i, T in enumerate(targets):
         solutions = robot.ik(T, q_seed=previous)
         if not solutions:
-            raise SingularityError(f"poses[{i}]: no IK solution ({solutions.reason}); "
-                                   f"expected a path inside the workspace")
+            raise UnreachableError(f"poses[{i}]: no IK solution ({solutions.reason}); "
+                                   f"expected a path inside the workspace", field="poses",
+                                   index=i, expected="a path inside the workspace")
         previous = solutions.nearest(previous)
         path[i] = previous
     return path
@@ -903,15 +816,15 @@ def analyse_path(robot: Robot, path: ArrayLike, q_start: ArrayLike | None = None
     elif data.ndim == 2 and data.shape[1] == robot.dof:
         q = data
     else:
-        raise SingularityError(f"path: expected joint vectors (M, {robot.dof}) or poses "
-                               f"(M, 4, 4), got shape {data.shape}")
+        raise InputError(f"path: expected joint vectors (M, {robot.dof}) or poses "
+                         f"(M, 4, 4), got shape {data.shape}", field="path")
     if len(q) < 3:
-        raise SingularityError(f"path: expected at least 3 samples, got {len(q)}")
+        raise InputError(f"path: expected at least 3 samples, got {len(q)}", field="path")
     if not np.all(np.isfinite(q)):
-        raise SingularityError("path: expected finite values, got NaN or inf")
+        raise InputError("path: expected finite values, got NaN or inf", field="path")
     if not (math.isfinite(rotation_length) and rotation_length >= 0):
-        raise SingularityError(f"rotation_length: expected a finite number >= 0 (m/rad), got "
-                               f"{rotation_length!r}")
+        raise InputError(f"rotation_length: expected a finite number >= 0 (m/rad), got "
+                         f"{rotation_length!r}", field="rotation_length")
     poses = robot.fk(q)
     steps = _cartesian_steps(poses, rotation_length)
     arc = np.concatenate([[0.0], np.cumsum(steps)])
@@ -1035,11 +948,11 @@ def add_singularity_arguments(parser: argparse.ArgumentParser) -> None:
 def cli_joint_values(robot: Robot, values: Sequence[float], degrees: bool,
                      field: str) -> NDArray[np.float64]:
     """Joint values given on the command line (option ``field``) -> SI; ``degrees`` converts
-    the revolute joints only. Raises SingularityError unless there is one value per joint."""
+    the revolute joints only. Raises InputError unless there is one value per joint."""
     array = np.asarray(values, dtype=float)
     if array.shape != (robot.dof,):
-        raise SingularityError(f"{field}: {robot.name} has {robot.dof} joints, got {array.size} "
-                               f"values")
+        raise InputError(f"{field}: {robot.name} has {robot.dof} joints, got {array.size} "
+                         f"values", field=field)
     revolute = np.array([j.is_revolute for j in robot.table.joints])
     return np.where(revolute & degrees, np.radians(array), array)
 

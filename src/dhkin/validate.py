@@ -75,7 +75,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.errors import DhkinError, FamilyError, URDFError
+from dhkin.errors import DhkinError, FamilyError, InputError, URDFError
 from dhkin.reference import Reference
 from dhkin.robot import Robot
 from dhkin.transforms import invert, pose_error
@@ -112,10 +112,6 @@ CONTINUITY_SETS: tuple[str, ...] = ("special", "near_singular")
 REFERENCE_KINDS: tuple[str, ...] = ("rounded", "exact")
 
 
-class ValidationInputError(DhkinError, ValueError):
-    """A validation was asked with bad arguments (IK spec, sample count, reference, replay...)."""
-
-
 # --------------------------------------------------------------------------------------------
 # Reference descriptions
 
@@ -140,7 +136,7 @@ def rounded_urdf(urdf_text: str, digits: int = ROUNDED_DIGITS) -> str:
     UR's vendor files. Everything else (comments, names, layout) is kept character for character.
     """
     if int(digits) != digits or digits < 1:
-        raise ValidationInputError(f"digits: expected a positive integer, got {digits!r}")
+        raise InputError(f"digits: expected a positive integer, got {digits!r}", field="digits")
 
     def attribute(match: re.Match[str]) -> str:
         numbers = " ".join(_round_token(t, int(digits)) for t in match.group(3).split())
@@ -183,8 +179,8 @@ class ReferenceSpec:
         if isinstance(data, str) and data in REFERENCE_KINDS:
             return cls(kind=data)
         if not isinstance(data, Mapping) or data.get("kind") not in (*REFERENCE_KINDS, "vendor"):
-            raise ValidationInputError(f"{source}: expected 'rounded', 'exact' or a vendor "
-                                       f"reference {{kind, path, base, tip}}, got {data!r}")
+            raise InputError(f"{source}: expected 'rounded', 'exact' or a vendor "
+                             f"reference {{kind, path, base, tip}}, got {data!r}", field=source)
         known = {k: data[k] for k in ("kind", "path", "base", "tip", "robot_tip", "digits")
                  if k in data}
         return cls(**known)
@@ -200,15 +196,15 @@ def resolve_reference(robot: Robot, reference: str | Path | ReferenceSpec | None
         spec = reference
     elif reference is None or (isinstance(reference, str) and reference in REFERENCE_KINDS):
         if base is not None or tip is not None:
-            raise ValidationInputError("base/tip (--base/--tip): frames apply to a vendor URDF "
-                                       "reference only, not to 'rounded' or 'exact'")
+            raise InputError("base/tip (--base/--tip): frames apply to a vendor URDF "
+                             "reference only, not to 'rounded' or 'exact'")
         return ReferenceSpec(kind=str(reference or "rounded"))
     else:
         path = Path(reference)
         if not path.is_file():
-            raise ValidationInputError(f"reference (--reference): {str(path)!r} is not a file; "
-                                       f"expected {' or '.join(map(repr, REFERENCE_KINDS))} or "
-                                       "the path of a URDF of the same robot")
+            raise InputError(f"reference (--reference): {str(path)!r} is not a file; "
+                             f"expected {' or '.join(map(repr, REFERENCE_KINDS))} or "
+                             "the path of a URDF of the same robot", field="reference")
         listed = VENDOR_REFERENCES.get(robot.name)
         spec = ReferenceSpec(kind="vendor", path=str(path.resolve()),
                              base=listed.base if listed else "base_link",
@@ -247,7 +243,7 @@ class TargetModel:
 def target_model(robot: Robot, reference: str | Path | ReferenceSpec | None = None,
                  base: str | None = None, tip: str | None = None) -> TargetModel:
     """The Pinocchio model that makes the targets and checks the solutions (see
-    :func:`resolve_reference`). Bad files, frames or chains raise ValidationInputError naming
+    :func:`resolve_reference`). Bad files, frames or chains raise InputError naming
     the argument."""
     spec = resolve_reference(robot, reference, base, tip)
     if spec.kind == "exact":
@@ -260,17 +256,17 @@ def target_model(robot: Robot, reference: str | Path | ReferenceSpec | None = No
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
-        raise ValidationInputError(f"reference (--reference): cannot read {str(path)!r} "
-                                   f"({exc.strerror})") from exc
+        raise InputError(f"reference (--reference): cannot read {str(path)!r} "
+                         f"({exc.strerror})", field="reference") from exc
     try:
         model = Reference(text, tip=spec.tip, base=spec.base, source=str(path))
     except URDFError as exc:
-        raise ValidationInputError(_frame_error(text, spec, exc)) from exc
+        raise InputError(_frame_error(text, spec, exc)) from exc
     if model.dof != robot.dof:
-        raise ValidationInputError(
+        raise InputError(
             f"reference (--reference): in {path} the chain {spec.base} -> {spec.tip} has "
             f"{model.dof} actuated joints {model.joint_names}; expected {robot.dof} like "
-            f"{robot.name} (choose the frames with --base/--tip)")
+            f"{robot.name} (choose the frames with --base/--tip)", field="reference")
     offset = None
     if spec.robot_tip != "tool0":
         offset = invert(tool_frame_from_robot(robot, spec.robot_tip))
@@ -451,7 +447,7 @@ def sample_joint_vectors(robot: Robot, n: int, seed: int) -> tuple[NDArray[np.fl
                                                                     list[str]]:
     """n uniform + n/10 special-angle + n/10 near-singular joint vectors (at least 1 each)."""
     if n < 1:
-        raise ValidationInputError(f"n: expected at least 1 sample, got {n}")
+        raise InputError(f"n: expected at least 1 sample, got {n}", field="n")
     rng = np.random.default_rng(seed)
     lower, upper = robot.lower, robot.upper
     extra = max(1, n // 10)
@@ -539,17 +535,17 @@ def own_ik(robot: Robot) -> IKCallable:
 def load_ik(spec: str) -> IKCallable:
     """'package.module:function' -> the callable (the working directory is importable)."""
     if ":" not in spec:
-        raise ValidationInputError(f"--ik: expected 'module:function', got {spec!r}")
+        raise InputError(f"--ik: expected 'module:function', got {spec!r}")
     module_name, function_name = spec.split(":", 1)
     if str(Path.cwd()) not in sys.path:
         sys.path.insert(0, str(Path.cwd()))
     try:
         module = importlib.import_module(module_name)
     except ImportError as exc:
-        raise ValidationInputError(f"--ik: cannot import module {module_name!r} ({exc})") from exc
+        raise InputError(f"--ik: cannot import module {module_name!r} ({exc})") from exc
     function = getattr(module, function_name, None)
     if not callable(function):
-        raise ValidationInputError(f"--ik: {module_name!r} has no callable {function_name!r}")
+        raise InputError(f"--ik: {module_name!r} has no callable {function_name!r}")
     return function
 
 
@@ -754,7 +750,7 @@ def validate(robot: Robot, ik: IKCallable | None = None, n: int = 10_000, seed: 
     tool0 (defaults: :data:`~dhkin.vendors.VENDOR_REFERENCES`, else base_link / tool0).
     """
     if n < 1:
-        raise ValidationInputError(f"n: expected at least 1 sample, got {n}")
+        raise InputError(f"n: expected at least 1 sample, got {n}", field="n")
     model = target_model(robot, reference, base, tip)
     callable_ik = own_ik(robot) if ik is None else ik
     if complete_expected is None:
@@ -907,13 +903,13 @@ def replay(robot: Robot, ik: IKCallable, path: str | Path, ik_name: str | None =
         joint_tolerance = float(data["joint_tolerance"])
         recorded = [np.asarray(f.get("perturbed_seed") or [], dtype=float) for f in failures]
     except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise ValidationInputError(f"{file}: not a dhkin failure file ({exc}); expected the JSON "
-                                   "written by `dhkin validate --failures`") from exc
+        raise InputError(f"{file}: not a dhkin failure file ({exc}); expected the JSON "
+                         "written by `dhkin validate --failures`") from exc
     if data.get("robot") != robot.name:
-        raise ValidationInputError(f"{file}: failures of robot {data.get('robot')!r}, "
-                                   f"expected {robot.name!r}")
+        raise InputError(f"{file}: failures of robot {data.get('robot')!r}, "
+                         f"expected {robot.name!r}")
     if not failures:
-        raise ValidationInputError(f"{file}: no failures to replay")
+        raise InputError(f"{file}: no failures to replay")
     if reference is None:
         reference = ReferenceSpec.from_json(data.get("reference", "exact"), f"{file}: reference")
     model = target_model(robot, reference, base, tip)
@@ -936,6 +932,6 @@ def tool_frame_from_robot(robot: Robot, frame: str) -> NDArray[np.float64]:
 
 
 __all__ = ["CONTINUITY_DISTANCE", "CONTINUITY_SETS", "OUTCOMES", "ROUNDED_DIGITS", "SAMPLE_SETS",
-           "SEED_PERTURBATION", "ReferenceSpec", "TargetModel", "ValidationInputError",
+           "SEED_PERTURBATION", "ReferenceSpec", "TargetModel",
            "ValidationReport", "adapt", "load_ik", "own_ik", "perturbed_seeds", "replay",
            "resolve_reference", "rounded_urdf", "target_model", "validate", "write_failures"]

@@ -141,17 +141,21 @@ def _fit_problems(table: DHTable, name: str) -> list[str]:
 
 
 def fit_family(table: DHTable, family: str | None = None) -> FamilyFit:
-    """The first family that fits ``table`` (or ``family``) within the band.
+    """The first family that fits ``table`` (or ``family``) within the band: the one decision
+    of "which family is this arm" that IK, singularity analysis and maps all use.
 
-    Raises FamilyError naming, per family, the conditions the table fails.
+    Raises FamilyError naming, per family, the conditions the table fails (its ``value``: a
+    dict family -> those conditions).
     """
     if family is not None and family not in FAMILIES:
         raise FamilyError(f"family: expected one of {list(FAMILIES)}, got {family!r}")
     names = [family] if family is not None else list(FAMILIES)
     report = []
+    problems_of: dict[str, list[str]] = {}  # the FamilyError's ``value``: what each family lacks
     for name in names:
         found = _fit_problems(table, name)
         if found:
+            problems_of[name] = found
             report.append(f"{name}: " + "; ".join(found))
             continue
         ideal = ideal_model(table)
@@ -161,4 +165,5 @@ def fit_family(table: DHTable, family: str | None = None) -> FamilyFit:
         return FamilyFit(name, ideal, refine, deviation(conditions), deviation_of_model,
                          FAMILIES[name].build(ideal))
     raise FamilyError(f"{table.name}: no closed-form IK family fits this table:\n  "
-                      + "\n  ".join(report))
+                      + "\n  ".join(report), field="family", value=problems_of,
+                      expected="a table within the band of one of " + ", ".join(FAMILIES))

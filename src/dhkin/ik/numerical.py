@@ -69,7 +69,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.errors import IKInputError, URDFError
+from dhkin.errors import InputError, URDFError
 from dhkin.ik.result import Configuration, IKSolutions
 from dhkin.reference import Reference
 
@@ -208,13 +208,14 @@ class SolverSettings:
     def checked(self) -> SolverSettings:
         """Self, after checking every value (IKInputError naming the bad one)."""
         if self.method not in ("lm", "dls", "newton"):
-            raise IKInputError(f"method: expected 'lm', 'dls' or 'newton', got {self.method!r}")
+            raise InputError(field="method", value=self.method,
+                             expected="'lm', 'dls' or 'newton'")
         _positive("tolerance", self.tolerance)
         _positive("damping", self.damping, allow_zero=self.method != "dls")
         _positive("nullspace_gain", self.nullspace_gain, allow_zero=True)
         if self.nullspace_gain > 1.0:
-            raise IKInputError(f"nullspace_gain: expected a value in [0, 1], "
-                               f"got {self.nullspace_gain!r}")
+            raise InputError(f"nullspace_gain: expected a value in [0, 1], "
+                             f"got {self.nullspace_gain!r}", field="nullspace_gain")
         _positive("nullspace_tolerance", self.nullspace_tolerance)
         _positive("distinct_tolerance", self.distinct_tolerance)
         _count("max_iterations", self.max_iterations, minimum=1)
@@ -230,7 +231,7 @@ def _positive(name: str, value: float, allow_zero: bool = False) -> None:
         value >= 0 if allow_zero else value > 0)
     if not ok:
         bound = ">= 0" if allow_zero else "> 0"
-        raise IKInputError(f"{name}: expected a finite number {bound}, got {value!r}")
+        raise InputError(f"{name}: expected a finite number {bound}, got {value!r}", field=name)
 
 
 @dataclass
@@ -386,8 +387,8 @@ class NumericalIK:
         low = np.where(low < -UNLIMITED, -math.inf, low)
         high = np.where(high > UNLIMITED, math.inf, high)
         if np.any(np.isnan(low) | np.isnan(high)) or np.any(low > high):
-            raise IKInputError(f"joint limits of {self.joint_names}: expected "
-                               f"lower <= upper, got lower={low}, upper={high}")
+            raise InputError(f"joint limits of {self.joint_names}: expected "
+                             f"lower <= upper, got lower={low}, upper={high}")
         return low, high
 
     # ------------------------------------------------------------------------------ solving
@@ -439,8 +440,8 @@ class NumericalIK:
         restarts = _count("restarts", restarts, minimum=0)
         if not (rng is None or isinstance(rng, np.random.Generator)
                 or (isinstance(rng, int | np.integer) and not isinstance(rng, bool))):
-            raise IKInputError(f"rng: expected an int seed, a numpy Generator or None, "
-                               f"got {rng!r}")
+            raise InputError(f"rng: expected an int seed, a numpy Generator or None, "
+                             f"got {rng!r}", field="rng")
         task.preferred, task.weights = self._preference(task, nullspace, seed)
         starts = self._starts(seed, restarts + 1, rng, task, settings)
 
@@ -518,8 +519,8 @@ class NumericalIK:
         """
         batch = _as_array("targets", targets)
         if batch.ndim not in (2, 3) or batch.shape[0] == 0:
-            raise IKInputError(f"targets: expected (N, 4, 4) poses or (N, 3) / (N, 2) points, "
-                               f"got shape {batch.shape}")
+            raise InputError(f"targets: expected (N, 4, 4) poses or (N, 3) / (N, 2) points, "
+                             f"got shape {batch.shape}", field="targets")
         count = batch.shape[0]
         seeds: list[NDArray[np.float64] | None] = [None] * count
         if q_seed is not None:
@@ -529,8 +530,8 @@ class NumericalIK:
             elif seed_array.shape == (count, self.dof):
                 seeds = list(seed_array)
             else:
-                raise IKInputError(f"q_seed: expected shape ({self.dof},) or ({count}, "
-                                   f"{self.dof}), got {seed_array.shape}")
+                raise InputError(f"q_seed: expected shape ({self.dof},) or ({count}, "
+                                 f"{self.dof}), got {seed_array.shape}", field="q_seed")
         Q = np.zeros((count, max_solutions, self.dof))
         valid = np.zeros((count, max_solutions), dtype=bool)
         for index, (target, seed) in enumerate(zip(batch, seeds, strict=True)):
@@ -616,36 +617,36 @@ class NumericalIK:
         try:
             vector = np.array(value, dtype=float)
         except (TypeError, ValueError) as exc:
-            raise IKInputError(f"{name}: expected {self.dof} numbers, got {value!r}") from exc
+            raise InputError(field=name, value=value, expected=f"{self.dof} numbers") from exc
         if vector.shape != (self.dof,):
-            raise IKInputError(f"{name}: expected shape ({self.dof},) for the joints "
-                               f"{self.joint_names}, got {vector.shape}")
+            raise InputError(f"{name}: expected shape ({self.dof},) for the joints "
+                             f"{self.joint_names}, got {vector.shape}", field=name)
         if finite and not np.all(np.isfinite(vector)):
-            raise IKInputError(f"{name}: expected finite joint values, got {vector}")
+            raise InputError(f"{name}: expected finite joint values, got {vector}", field=name)
         return vector
 
     def _task(self, target: ArrayLike, mode: Mode | None, tcp: ArrayLike | None) -> _Task:
         values = _as_array("target", target)
         if mode not in (None, "pose", "position"):
-            raise IKInputError(f"mode: expected 'pose', 'position' or None, got {mode!r}")
+            raise InputError(field="mode", value=mode, expected="'pose', 'position' or None")
         if values.shape == (4, 4):
             _check_pose("target", values)
         elif values.shape not in ((3,), (2,)):
-            raise IKInputError(f"target: expected a pose (4, 4), a point (3,) or an (x, y) "
-                               f"point (2,), got shape {values.shape}")
+            raise InputError(f"target: expected a pose (4, 4), a point (3,) or an (x, y) "
+                             f"point (2,), got shape {values.shape}", field="target")
         elif not np.all(np.isfinite(values)):
-            raise IKInputError(f"target: expected finite numbers, got {values}")
+            raise InputError(f"target: expected finite numbers, got {values}", field="target")
         if mode is None:
             mode = "pose" if values.shape == (4, 4) else "position"
         if mode == "pose" and values.shape != (4, 4):
-            raise IKInputError(f"target: mode='pose' needs a (4, 4) pose, got shape "
-                               f"{values.shape}; use mode='position' for a point")
+            raise InputError(f"target: mode='pose' needs a (4, 4) pose, got shape "
+                             f"{values.shape}; use mode='position' for a point", field="target")
         tcp_placement = None
         if tcp is not None:
             tcp_matrix = _as_array("tcp", tcp)
             if tcp_matrix.shape != (4, 4):
-                raise IKInputError(f"tcp: expected a (4, 4) transform tip -> TCP, got shape "
-                                   f"{tcp_matrix.shape}")
+                raise InputError(f"tcp: expected a (4, 4) transform tip -> TCP, got shape "
+                                 f"{tcp_matrix.shape}", field="tcp")
             _check_pose("tcp", tcp_matrix)
             tcp_placement = pin.SE3(tcp_matrix[:3, :3].copy(), tcp_matrix[:3, 3].copy())
         base = self._chain.world_from_base
@@ -673,10 +674,10 @@ class NumericalIK:
             return None, None
         if isinstance(nullspace, str):
             if nullspace not in ("auto", "seed", "mid_range"):
-                raise IKInputError(f"nullspace: expected 'auto', 'seed', 'mid_range', a joint "
-                                   f"vector or None, got {nullspace!r}")
+                raise InputError(f"nullspace: expected 'auto', 'seed', 'mid_range', a joint "
+                                 f"vector or None, got {nullspace!r}", field="nullspace")
             if nullspace == "seed" and seed is None:
-                raise IKInputError("nullspace='seed' needs a q_seed")
+                raise InputError("nullspace='seed' needs a q_seed")
             use_seed = nullspace == "seed" or (nullspace == "auto" and seed is not None)
             preferred = seed if use_seed else self.mid_range
             weights = np.ones(self.dof) if use_seed else self._limited.astype(float)
@@ -1091,23 +1092,23 @@ def _as_array(name: str, value: ArrayLike) -> NDArray[np.float64]:
     try:
         return np.array(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise IKInputError(f"{name}: expected numbers, got {value!r}") from exc
+        raise InputError(f"{name}: expected numbers, got {value!r}", field=name) from exc
 
 
 def _check_pose(name: str, T: NDArray[np.float64]) -> None:
     """IKInputError unless T is a finite homogeneous transform with a proper rotation."""
     if not np.isfinite(T).all():
-        raise IKInputError(f"{name}: expected finite numbers, got NaN or inf")
+        raise InputError(f"{name}: expected finite numbers, got NaN or inf", field=name)
     R = T[:3, :3]
     orthogonality = float(np.abs(R @ R.T - _IDENTITY3).max())
     (a, b, c), (d, e, f), (g, h, i) = R.tolist()
     determinant = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     if orthogonality > 1e-6 or determinant < 0:
-        raise IKInputError(f"{name}: rotation block is not a rotation matrix "
-                           f"(|R R^T - I| = {orthogonality:.2e}, det {determinant:.3g}; "
-                           f"expected <= 1e-6 and det +1)")
+        raise InputError(f"{name}: rotation block is not a rotation matrix "
+                         f"(|R R^T - I| = {orthogonality:.2e}, det {determinant:.3g}; "
+                         f"expected <= 1e-6 and det +1)", field=name)
     if T[3].tolist() != [0.0, 0.0, 0.0, 1.0]:
-        raise IKInputError(f"{name}: expected last row (0, 0, 0, 1), got {T[3]}")
+        raise InputError(f"{name}: expected last row (0, 0, 0, 1), got {T[3]}", field=name)
 
 
 _IDENTITY3 = np.eye(3)
@@ -1115,7 +1116,7 @@ _IDENTITY3 = np.eye(3)
 
 def _count(name: str, value: int, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise IKInputError(f"{name}: expected an integer >= {minimum}, got {value!r}")
+        raise InputError(f"{name}: expected an integer >= {minimum}, got {value!r}", field=name)
     return int(value)
 
 
@@ -1158,6 +1159,6 @@ def _solver_of(source: Robot | Reference | NumericalIK | str | Path, tip: str | 
     path = Path(source)
     if path.suffix == ".urdf":
         if tip is None:
-            raise IKInputError(f"{path}: a URDF needs the tip frame (tip=...)")
+            raise InputError(f"{path}: a URDF needs the tip frame (tip=...)")
         return NumericalIK.from_urdf(path, tip, base)
     return solver_for_robot(load(source), tip or "tool0")

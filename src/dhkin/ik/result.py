@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.errors import IKInputError
+from dhkin.errors import InputError
 
 #: Singularity flags, stored as bits so that batches keep them in one uint8 array.
 WRIST, ELBOW, SHOULDER = 1, 2, 4
@@ -82,9 +82,10 @@ class IKSolutions:
         """
         current = np.asarray(q_now, dtype=float)
         if current.shape != (self.q.shape[1],):
-            raise IKInputError(f"q_now: expected shape ({self.q.shape[1]},), got {current.shape}")
+            raise InputError(field="q_now", value=current.shape,
+                             expected=f"shape ({self.q.shape[1]},)")
         if len(self) == 0:
-            raise IKInputError(f"no solution to choose from: {self.reason}")
+            raise InputError(f"no solution to choose from: {self.reason}")
         return self.q[int(np.argmin(np.linalg.norm(self.q - current, axis=1)))].copy()
 
     def __repr__(self) -> str:

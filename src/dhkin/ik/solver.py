@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
-from dhkin.errors import IKInputError
+from dhkin.errors import InputError
 from dhkin.ik.family import BAND, FamilyFit
 from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions, flag_names
 from dhkin.transforms import invert, rot_x, rot_z, translation
@@ -155,15 +155,15 @@ def _spread_index(kernel: int) -> int:
 
 
 def check_tolerance(tolerance: Any) -> float:
-    """``tolerance`` as a float; IKInputError unless it is a positive finite number."""
+    """``tolerance`` as a float; InputError unless it is a positive finite number."""
     if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating,
                                                                  np.integer)):
-        raise IKInputError(f"tolerance: expected a positive finite number (m and rad), got "
-                           f"{tolerance!r}")
+        raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
+                         f"{tolerance!r}", field="tolerance")
     value = float(tolerance)
     if not (math.isfinite(value) and value > 0.0):
-        raise IKInputError(f"tolerance: expected a positive finite number (m and rad), got "
-                           f"{tolerance!r}")
+        raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
+                         f"{tolerance!r}", field="tolerance")
     return value
 
 
@@ -172,13 +172,14 @@ def as_targets(T: ArrayLike) -> tuple[NDArray[np.float64], bool]:
     try:
         targets = np.ascontiguousarray(T, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise IKInputError(f"T: expected a (4, 4) pose or (N, 4, 4) poses of numbers ({exc})"
-                           ) from exc
+        raise InputError(f"T: expected a (4, 4) pose or (N, 4, 4) poses of numbers ({exc})"
+                         , field="T") from exc
     single = targets.ndim == 2
     if single:
         targets = targets[None]
     if targets.ndim != 3 or targets.shape[1:] != (4, 4):
-        raise IKInputError(f"T: expected a (4, 4) pose or (N, 4, 4) poses, got {np.shape(T)}")
+        raise InputError(field="T", value=np.shape(T),
+                         expected="a (4, 4) pose or (N, 4, 4) poses")
     return targets, single
 
 
@@ -247,11 +248,11 @@ class ClosedFormSolver:
         if tcp is not None:
             frame = np.asarray(tcp, dtype=float)
             if frame.shape != (4, 4) or not np.all(np.isfinite(frame)):
-                raise IKInputError(f"tcp: expected a finite (4, 4) transform tool0 -> TCP, "
-                                   f"got shape {frame.shape}")
+                raise InputError(f"tcp: expected a finite (4, 4) transform tool0 -> TCP, "
+                                 f"got shape {frame.shape}", field="tcp")
             status = self._status(frame)
             if status:
-                raise IKInputError(pose_error_message("tcp", frame, status))
+                raise InputError(pose_error_message("tcp", frame, status))
             projected = np.eye(4)
             from dhkin.ik.compiled.pose import project
 
@@ -271,15 +272,15 @@ class ClosedFormSolver:
         try:
             seeds = np.ascontiguousarray(q_seed, dtype=np.float64)
         except (TypeError, ValueError) as exc:
-            raise IKInputError(f"q_seed: expected numbers of shape ({self.dof},) or "
-                               f"({n_poses}, {self.dof}) ({exc})") from exc
+            raise InputError(f"q_seed: expected numbers of shape ({self.dof},) or "
+                             f"({n_poses}, {self.dof}) ({exc})", field="q_seed") from exc
         if seeds.shape == (self.dof,):
             seeds = seeds[None]
         if seeds.shape not in ((1, self.dof), (n_poses, self.dof)):
-            raise IKInputError(f"q_seed: expected shape ({self.dof},) or ({n_poses}, "
-                               f"{self.dof}), got {np.shape(q_seed)}")
+            raise InputError(f"q_seed: expected shape ({self.dof},) or ({n_poses}, "
+                             f"{self.dof}), got {np.shape(q_seed)}", field="q_seed")
         if not np.all(np.isfinite(seeds)):
-            raise IKInputError(f"q_seed: expected finite values, got {seeds.tolist()}")
+            raise InputError(field="q_seed", value=seeds.tolist(), expected="finite values")
         return seeds
 
     def _clamp(self, tolerance: float) -> float:
@@ -297,9 +298,9 @@ class ClosedFormSolver:
         try:
             target = np.ascontiguousarray(T, dtype=np.float64)
         except (TypeError, ValueError) as exc:
-            raise IKInputError(f"T: expected a (4, 4) pose of numbers ({exc})") from exc
+            raise InputError(f"T: expected a (4, 4) pose of numbers ({exc})", field="T") from exc
         if target.shape != (4, 4):
-            raise IKInputError(f"T: expected a (4, 4) pose, got shape {np.shape(T)}")
+            raise InputError(f"T: expected a (4, 4) pose, got shape {np.shape(T)}", field="T")
         seed = self._zero_seed if q_seed is None else self._seeds(q_seed, 1)[0]
         frames = self.frames if tcp is None else self.frames_for(tcp)
         try:
@@ -316,8 +317,9 @@ class ClosedFormSolver:
             from dhkin.ik.compiled.pose import STATUS_BAD_SEED
 
             if status == STATUS_BAD_SEED:
-                raise IKInputError(f"q_seed: expected finite values, got {seed.tolist()}")
-            raise IKInputError(pose_error_message("T", target, status))
+                raise InputError(field="q_seed", value=seed.tolist(),
+                                 expected="finite values")
+            raise InputError(pose_error_message("T", target, status))
         if count < 0:  # cannot happen: max_solutions counts every copy
             raise RuntimeError("IK expansion: more solutions than counted")
         projection, dropped = float(info[INFO.projection]), int(info[INFO.dropped])
@@ -472,7 +474,7 @@ class ClosedFormSolver:
                    first_index: int, workers: int = 1) -> tuple[NDArray[Any], ...]:
         """Steps 1-3 for checked poses: q, ok, flags, errors, totals, info (see
         dhkin.ik.compiled.pipeline.solve_batch), in contiguous slices on up to ``workers``
-        threads; a rejected pose raises IKInputError."""
+        threads; a rejected pose raises InputError (its ``index`` the pose's)."""
         kernels = _kernels()
         N, B, n = targets.shape[0], self.n_branches, self.dof
         q = np.empty((N, B, n))
@@ -523,8 +525,10 @@ class ClosedFormSolver:
             index = int(bad[0])
             status = int(info[index, INFO.status])
             if status == STATUS_BAD_SEED:
-                raise IKInputError(f"q_seed[{start + index}]: expected finite values")
-            raise IKInputError(pose_error_message(f"T[{start + index}]", targets[index], status))
+                raise InputError(f"q_seed[{start + index}]: expected finite values",
+                                 field="q_seed", index=start + index, expected="finite values")
+            raise InputError(pose_error_message(f"T[{start + index}]", targets[index], status),
+                             field="T", index=start + index)
 
     def solve_chunks(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                      tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
@@ -560,8 +564,8 @@ def check_workers(workers: Any) -> int:
     if workers is None:
         return default_workers()
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
-        raise IKInputError(f"workers: expected a positive integer or None (the CPUs this "
-                           f"process may use), got {workers!r}")
+        raise InputError(f"workers: expected a positive integer or None (the CPUs this "
+                         f"process may use), got {workers!r}", field="workers")
     return int(workers)
 
 
@@ -596,6 +600,6 @@ def _pool(size: int) -> ThreadPoolExecutor:
 def _check_chunk(chunk_size: Any) -> int:
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
             or chunk_size < 1:
-        raise IKInputError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+        raise InputError(field="chunk_size", value=chunk_size, expected="a positive integer")
     return int(chunk_size)
 

@@ -23,7 +23,6 @@ from dhkin.ik.numerical import (
     NumericalIK,
     SolverSettings,
     numerical_ik,
-    solver_for_robot,
 )
 from dhkin.reference import Reference
 from dhkin.transforms import pose_error
@@ -470,7 +469,8 @@ def test_numerical_ik_entry_points(solvers):
     by_name = numerical_ik("planar_2r", [1.0, 1.0], [2.0, -2.0])
     by_robot = numerical_ik(robot, [1.0, 1.0], [2.0, -2.0])
     np.testing.assert_allclose(by_name.q, by_robot.q)
-    assert solver_for_robot(robot) is solver_for_robot(robot)
+    assert robot.numerical_solver() is robot.numerical_solver()
+    assert numerical_ik(robot, [1.0, 1.0]).q.shape[1] == 2  # the robot's own solver
     _, T = random_targets(solvers["panda"], 1, seed=71)
     by_urdf = numerical_ik(PANDA_URDF, T[0], tip=PANDA_TIP)
     position, rotation = oracle_pose_errors(solvers["panda"].reference, by_urdf.q[0], T[0])

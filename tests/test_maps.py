@@ -10,7 +10,6 @@ reach (a fine 1-D scan, or a bisection to the workspace boundary, finds a singul
 
 from __future__ import annotations
 
-import argparse
 import math
 import struct
 
@@ -25,8 +24,6 @@ from dhkin.maps import (
     FIGURE_SIZE,
     JointSlice,
     WorkspaceSlice,
-    add_map_arguments,
-    cli_map,
     draw_maps,
     joint_slice,
     workspace_slice,
@@ -390,13 +387,12 @@ def test_figure_png_has_the_expected_size(tmp_path, load_robot) -> None:
 
 
 def test_cli_map_writes_the_png_and_says_what_it_found(tmp_path, capsys) -> None:
-    parser = argparse.ArgumentParser()
-    add_map_arguments(parser)
+    from dhkin.cli import main
+
     out = tmp_path / "abb.png"
-    args = parser.parse_args(["abb_irb1200_7_70", "-o", str(out), "--resolution", "31",
-                              "--joint-resolution", "41", "--rpy", "0", "90", "0", "--deg",
-                              "--no-progress"])
-    assert cli_map(args) == 0
+    assert main(["map", "abb_irb1200_7_70", "-o", str(out), "--resolution", "31",
+                 "--joint-resolution", "41", "--rpy", "0", "90", "0", "--deg",
+                 "--no-progress"]) == 0
     text = capsys.readouterr().out
     assert f"wrote {out}" in text
     assert "tool0 rpy (0.0, 90.0, 0.0) deg" in text

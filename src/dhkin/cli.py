@@ -1,4 +1,5 @@
-"""The `dhkin` command line. Exit status 0 means all is well; 1 a failed check; 2 bad input."""
+"""The `dhkin` command line (every argparse parser of dhkin lives here). Exit status 0 means all
+is well; 1 a failed check; 2 bad input."""
 
 from __future__ import annotations
 
@@ -10,10 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dhkin.errors import DhkinError
-from dhkin.maps import add_map_arguments, cli_map
+from dhkin.errors import DhkinError, InputError
 from dhkin.robot import Robot, builtin_dir, builtin_names, load
-from dhkin.singularity import add_singularity_arguments, cli_singularity
 from dhkin.transforms import matrix_to_rpy, xyz_rpy_to_matrix
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
@@ -70,11 +69,15 @@ def _angles(values: Sequence[float], degrees: bool) -> np.ndarray:
     return np.radians(array) if degrees else array
 
 
-def _joint_values(robot: Robot, values: Sequence[float], degrees: bool) -> np.ndarray:
-    """Command-line joint values -> SI; --deg converts revolute joints only."""
+def _joint_values(robot: Robot, values: Sequence[float], degrees: bool,
+                  field: str = "q") -> np.ndarray:
+    """Joint values given on the command line (argument ``field``) -> SI; ``degrees`` converts
+    the revolute joints only. InputError unless there is one value per joint. (The one parser
+    of joint values for every subcommand.)"""
     q = np.asarray(values, dtype=float)
     if q.shape != (robot.dof,):
-        raise DhkinError(f"q: {robot.name} has {robot.dof} joints, got {q.size} values")
+        raise InputError(f"{field}: {robot.name} has {robot.dof} joints, got {q.size} values",
+                         field=field, value=q.tolist(), expected=f"{robot.dof} joint values")
     revolute = np.array([j.is_revolute for j in robot.table.joints])
     return np.where(revolute & degrees, np.radians(q), q)
 
@@ -205,6 +208,83 @@ def cmd_check(args: argparse.Namespace) -> int:
     return EXIT_OK if passed else EXIT_FAILED
 
 
+# --------------------------------------------------------------------------------------------
+# `dhkin singularity ROBOT q... [--deg]` and `dhkin map ROBOT -o FILE.png [options]`
+
+
+def _add_singularity_arguments(parser: argparse.ArgumentParser) -> None:
+    from dhkin.singularity import DEFAULT_THRESHOLDS, DISTANCE_UNITS, KINDS
+
+    _robot_arg(parser)
+    parser.add_argument("q", type=float, nargs="+", help="joint values (rad and m, or --deg)")
+    parser.add_argument("--deg", action="store_true", help="revolute joint values in degrees")
+    for kind in KINDS:
+        parser.add_argument(f"--{kind}", type=float, default=DEFAULT_THRESHOLDS.of(kind),
+                            metavar="T", help=f"{kind} threshold ({DISTANCE_UNITS[kind]}, "
+                                              f"default {DEFAULT_THRESHOLDS.of(kind):g})")
+    parser.add_argument("--json", action="store_true", help="print the report as JSON")
+
+
+def cmd_singularity(args: argparse.Namespace) -> int:
+    """Print the singularity report of one configuration."""
+    from dhkin.singularity import KINDS, Thresholds, report_to_json, singularity_report
+
+    robot = load(args.robot)
+    q = _joint_values(robot, args.q, bool(args.deg))
+    thresholds = Thresholds(**{kind: getattr(args, kind) for kind in KINDS})
+    report = singularity_report(robot, q, thresholds)
+    if args.json:
+        print(json.dumps(report_to_json(report), indent=2))
+        return EXIT_OK
+    if args.deg:
+        revolute = np.array([j.is_revolute for j in robot.table.joints])
+        shown = np.where(revolute, np.asarray(args.q, dtype=float), q)  # as given
+        print(f"q = {np.array2string(shown, precision=4)} (deg for revolute joints)")
+    print(report)
+    return EXIT_OK
+
+
+def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
+    from dhkin.maps import DEFAULT_JOINT_RESOLUTION, DEFAULT_RESOLUTION, PLANES
+
+    _robot_arg(parser)
+    parser.add_argument("-o", "--output", required=True, help="PNG file to write")
+    parser.add_argument("--plane", choices=sorted(PLANES), default="xz",
+                        help="workspace slice plane of base_link (default xz)")
+    parser.add_argument("--offset", type=float, default=0.0,
+                        help="the plane's third coordinate (m, default 0)")
+    parser.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
+                        help="tool0 orientation, URDF rpy (rad, or --deg); default per family: "
+                             "tool0 z along +x (spherical wrist, Stanford), horizontal at "
+                             "45 deg to the slice (offset wrist)")
+    parser.add_argument("--q", type=float, nargs="+", metavar="Q",
+                        help="joint values held fixed in the joint slices (rad and m, or --deg)")
+    parser.add_argument("--deg", action="store_true", help="angles of --rpy and --q in degrees")
+    parser.add_argument("--resolution", type=int, default=DEFAULT_RESOLUTION,
+                        help=f"workspace grid cells per side (default {DEFAULT_RESOLUTION})")
+    parser.add_argument("--joint-resolution", type=int, default=DEFAULT_JOINT_RESOLUTION,
+                        help=f"joint grid cells per side (default {DEFAULT_JOINT_RESOLUTION})")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def cmd_map(args: argparse.Namespace) -> int:
+    """Draw the maps, print what was written and found."""
+    from dhkin.maps import describe, draw_maps
+
+    robot = load(args.robot)
+    rpy = None
+    if args.rpy is not None:
+        rpy = [float(v) for v in _angles(args.rpy, bool(args.deg))]
+    q_fixed = None
+    if args.q is not None:
+        q_fixed = _joint_values(robot, args.q, bool(args.deg), "--q")
+    maps = draw_maps(robot, args.output, plane=args.plane, offset=args.offset, rpy=rpy,
+                     resolution=args.resolution, joint_resolution=args.joint_resolution,
+                     q_fixed=q_fixed, progress=not args.no_progress and sys.stderr.isatty())
+    print(describe(maps))
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="dhkin", description="Kinematics of serial arms from DH tables, checked against "
@@ -280,12 +360,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("singularity", help="singularity classes, factored det J and Pinocchio's "
                                            "manipulability of a configuration")
-    add_singularity_arguments(p)
-    p.set_defaults(run=cli_singularity)
+    _add_singularity_arguments(p)
+    p.set_defaults(run=cmd_singularity)
 
     p = sub.add_parser("map", help="manipulability maps with singular loci (PNG)")
-    add_map_arguments(p)
-    p.set_defaults(run=cli_map)
+    _add_map_arguments(p)
+    p.set_defaults(run=cmd_map)
 
     p = sub.add_parser("check", help="the main job: regenerate, validate, cross-check")
     p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from dhkin.arm import Arm
 from dhkin.errors import URDFError
 from dhkin.reference import Reference
-from dhkin.robot import Robot
 from dhkin.transforms import pose_error
 
 #: Default pass threshold of `dhkin compare` (m and rad). The UR vendor files round pi/2 to
@@ -52,7 +52,7 @@ class CompareReport:
                 f" (tolerance {self.tolerance:.0e})")
 
 
-def compare_with_urdf(robot: Robot, urdf_path: str | Path, base_frame: str = "base_link",
+def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base_link",
                       tip: str = "tool0", robot_tip: str = "tool0", n: int = 1000, seed: int = 0,
                       tolerance: float = DEFAULT_COMPARE_TOLERANCE) -> CompareReport:
     """Compare ``robot`` (base_link -> robot_tip) with ``urdf_path`` (base_frame -> tip)."""

@@ -33,7 +33,6 @@ cells through which they pass marked as loci.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
 import sys
@@ -51,13 +50,12 @@ from dhkin.singularity import (
     DEFAULT_THRESHOLDS,
     KINDS,
     SingularityModel,
-    cli_joint_values,
     singularity_model,
 )
 from dhkin.transforms import xyz_rpy_to_matrix
 
 if TYPE_CHECKING:
-    from dhkin.robot import Robot
+    from dhkin.arm import Arm
 
 Array = NDArray[np.float64]
 Mask = NDArray[np.bool_]
@@ -119,12 +117,14 @@ def has_copy_within_limits(table: DHTable, q: Array) -> Mask:
 class BranchSolver:
     """IK of many poses, one solution per branch: q (N, B, n) and valid (N, B)."""
 
-    def __init__(self, robot: Robot) -> None:
-        from dhkin.robot import Robot as RobotClass
+    def __init__(self, robot: Arm) -> None:
+        from dhkin.ik.family import fit_family
+        from dhkin.ik.solver import ClosedFormSolver
 
         self.table = robot.table
-        self.principal = RobotClass(principal_table(robot.table))
-        self.n_branches = len(self.principal.ik_solver.branch_labels)
+        principal = principal_table(robot.table)
+        self.principal = ClosedFormSolver(principal, fit_family(principal))
+        self.n_branches = len(self.principal.branch_labels)
 
     def solve(self, T: Array) -> tuple[Array, Mask]:
         n = len(T)
@@ -132,7 +132,7 @@ class BranchSolver:
         valid = np.zeros((n, self.n_branches), bool)
         if n == 0:
             return q, valid
-        batch = self.principal.ik_batch_detailed(T)
+        batch = self.principal.solve_batch(T)
         pose, slot = np.nonzero(batch.valid)
         branch = batch.branch[pose, slot]
         q[pose, branch] = batch.q[pose, slot]
@@ -209,7 +209,7 @@ def _plane_point(plane: str, offset: float, u: ArrayLike, v: ArrayLike) -> Array
     return out
 
 
-def default_extent(robot: Robot, plane: str, n_samples: int = 20_000
+def default_extent(robot: Arm, plane: str, n_samples: int = 20_000
                    ) -> tuple[tuple[float, float], tuple[float, float]]:
     """(u range, v range) covering tool0's reach: FK of random joint vectors (fixed seed), 5%
     margin; horizontal extents symmetric about axis 1."""
@@ -229,7 +229,7 @@ def default_extent(robot: Robot, plane: str, n_samples: int = 20_000
     return span(iu), span(iv)
 
 
-def workspace_slice(robot: Robot, plane: str = "xz", offset: float = 0.0,
+def workspace_slice(robot: Arm, plane: str = "xz", offset: float = 0.0,
                     rpy: Sequence[float] | None = None,
                     extent: tuple[tuple[float, float], tuple[float, float]] | None = None,
                     resolution: int = DEFAULT_RESOLUTION, progress: bool = False
@@ -355,7 +355,7 @@ def _locus_cells(signed: Array, distance: Array) -> Mask:
     return marked
 
 
-def _classify_boundary(robot: Robot, model: SingularityModel, solver: BranchSolver, plane: str,
+def _classify_boundary(robot: Arm, model: SingularityModel, solver: BranchSolver, plane: str,
                        offset: float, rotation: Array, u: Array, v: Array, reachable: Mask,
                        progress: bool) -> dict[str, Mask]:
     """Singular loci in the boundary cells, where a neighbour is missing for the interior test.
@@ -543,7 +543,7 @@ class JointSlice:
     loci: dict[str, Mask]
 
 
-def default_fixed_q(robot: Robot) -> Array:
+def default_fixed_q(robot: Arm) -> Array:
     """Joint values held fixed in the joint slices: 0 (clipped to the limits), except joint 2 at
     30 deg (away from the upright pose, where the stretched arm puts the wrist centre on axis 1)
     and joint 5 at theta5 = 90 deg (farthest from the wrist singularity), each when within its
@@ -560,7 +560,7 @@ def default_fixed_q(robot: Robot) -> Array:
     return q
 
 
-def joint_slice(robot: Robot, joints: tuple[int, int] = (2, 3), q_fixed: ArrayLike | None = None,
+def joint_slice(robot: Arm, joints: tuple[int, int] = (2, 3), q_fixed: ArrayLike | None = None,
                 resolution: int = DEFAULT_JOINT_RESOLUTION) -> JointSlice:
     """|det J| and singular loci on a grid of two joints over their limits (one turn, centred
     on 0, for a joint whose limits span more), the others at ``q_fixed`` (default:
@@ -626,7 +626,7 @@ class SingularityMaps:
     path: Path
 
 
-def draw_maps(robot: Robot, output: str | Path, plane: str = "xz", offset: float = 0.0,
+def draw_maps(robot: Arm, output: str | Path, plane: str = "xz", offset: float = 0.0,
               rpy: Sequence[float] | None = None, resolution: int = DEFAULT_RESOLUTION,
               joint_resolution: int = DEFAULT_JOINT_RESOLUTION,
               q_fixed: ArrayLike | None = None, progress: bool = False) -> SingularityMaps:
@@ -697,14 +697,14 @@ def _direction_text(vector: Array) -> str:
     return " ".join(parts)
 
 
-def _joint_label(robot: Robot, joint: int) -> tuple[str, float]:
+def _joint_label(robot: Arm, joint: int) -> tuple[str, float]:
     info = robot.table.joints[joint - 1]
     if info.is_revolute:
         return f"q{joint} {info.name} (deg)", 180.0 / math.pi
     return f"q{joint} {info.name} (m)", 1.0
 
 
-def _draw_joint_slice(ax, figure, robot: Robot, data: JointSlice) -> None:
+def _draw_joint_slice(ax, figure, robot: Arm, data: JointSlice) -> None:
     from matplotlib.lines import Line2D
 
     u_label, u_scale = _joint_label(robot, data.joints[0])
@@ -735,54 +735,10 @@ def _draw_joint_slice(ax, figure, robot: Robot, data: JointSlice) -> None:
     ax.set_title(f"Joint slice q{data.joints[0]}-q{data.joints[1]}\n({fixed})", fontsize=11)
 
 
-def _format_joint(robot: Robot, joint: int, value: float) -> str:
+def _format_joint(robot: Arm, joint: int, value: float) -> str:
     if robot.table.joints[joint - 1].is_revolute:
         return f"{math.degrees(value):.0f} deg"
     return f"{value:.3g} m"
-
-
-# --------------------------------------------------------------------------------------------
-# Command line: `dhkin map ROBOT -o FILE.png [options]` (wired into dhkin.cli)
-
-
-def add_map_arguments(parser: argparse.ArgumentParser) -> None:
-    """Arguments of `dhkin map`."""
-    parser.add_argument("robot", help="built-in robot name (see `dhkin robots`) or a table file")
-    parser.add_argument("-o", "--output", required=True, help="PNG file to write")
-    parser.add_argument("--plane", choices=sorted(PLANES), default="xz",
-                        help="workspace slice plane of base_link (default xz)")
-    parser.add_argument("--offset", type=float, default=0.0,
-                        help="the plane's third coordinate (m, default 0)")
-    parser.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
-                        help="tool0 orientation, URDF rpy (rad, or --deg); default per family: "
-                             "tool0 z along +x (spherical wrist, Stanford), horizontal at "
-                             "45 deg to the slice (offset wrist)")
-    parser.add_argument("--q", type=float, nargs="+", metavar="Q",
-                        help="joint values held fixed in the joint slices (rad and m, or --deg)")
-    parser.add_argument("--deg", action="store_true", help="angles of --rpy and --q in degrees")
-    parser.add_argument("--resolution", type=int, default=DEFAULT_RESOLUTION,
-                        help=f"workspace grid cells per side (default {DEFAULT_RESOLUTION})")
-    parser.add_argument("--joint-resolution", type=int, default=DEFAULT_JOINT_RESOLUTION,
-                        help=f"joint grid cells per side (default {DEFAULT_JOINT_RESOLUTION})")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-
-
-def cli_map(args: argparse.Namespace) -> int:
-    """`dhkin map`: draw the maps, print what was written and found; exit status 0."""
-    from dhkin.robot import load
-
-    robot = load(args.robot)
-    rpy = None
-    if args.rpy is not None:
-        rpy = [float(v) for v in (np.radians(args.rpy) if args.deg else args.rpy)]
-    q_fixed = None
-    if args.q is not None:
-        q_fixed = cli_joint_values(robot, args.q, bool(args.deg), "--q")
-    maps = draw_maps(robot, args.output, plane=args.plane, offset=args.offset, rpy=rpy,
-                     resolution=args.resolution, joint_resolution=args.joint_resolution,
-                     q_fixed=q_fixed, progress=not args.no_progress and sys.stderr.isatty())
-    print(describe(maps))
-    return 0
 
 
 def describe(maps: SingularityMaps) -> str:

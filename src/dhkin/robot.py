@@ -10,42 +10,20 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.builtin import builtin_dir, builtin_names, resolve_table_path
 from dhkin.dh import DHTable, load_table
-from dhkin.errors import FamilyError, RobotNotFoundError
+from dhkin.errors import FamilyError
 from dhkin.ik.result import IKBatch, IKSolutions
 from dhkin.ik.solver import DEFAULT_CHUNK, DEFAULT_TOLERANCE, ClosedFormSolver
 from dhkin.reference import Reference
 from dhkin.urdf import GeneratedFiles, generate
 
 if TYPE_CHECKING:
+    from dhkin.ik.numerical import NumericalIK
     from dhkin.singularity import SingularityReport, Thresholds
 
-
-def builtin_dir() -> Path:
-    """Folder of the built-in robots: inside the installed package, or the repository's robots/."""
-    packaged = Path(__file__).resolve().parent / "robots"
-    if packaged.is_dir():
-        return packaged
-    return Path(__file__).resolve().parents[2] / "robots"
-
-
-def builtin_names() -> list[str]:
-    """Names of the built-in robots (the ``*.yaml`` tables in :func:`builtin_dir`)."""
-    return sorted(p.stem for p in builtin_dir().glob("*.yaml"))
-
-
-def resolve_table_path(name_or_path: str | Path) -> Path:
-    """A built-in robot name or a path to a ``.yaml`` table -> the table file's path."""
-    candidate = Path(name_or_path)
-    if candidate.suffix in (".yaml", ".yml") or candidate.exists():
-        if not candidate.is_file():
-            raise RobotNotFoundError(f"{candidate}: no such DH table file")
-        return candidate
-    builtin = builtin_dir() / f"{name_or_path}.yaml"
-    if builtin.is_file():
-        return builtin
-    raise RobotNotFoundError(f"{name_or_path!r} is neither a built-in robot nor a table file; "
-                             f"built-in robots: {builtin_names()}")
+#: Re-exported: the built-in robots (dhkin.builtin).
+__all__ = ["Robot", "builtin_dir", "builtin_names", "load", "resolve_table_path"]
 
 
 def load(name_or_path: str | Path) -> Robot:
@@ -62,6 +40,7 @@ class Robot:
 
     def __init__(self, table: DHTable) -> None:
         self.table = table
+        self._numerical_solvers: dict[str, NumericalIK] = {}
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, {self.table.convention} DH, {self.dof} joints)"
@@ -133,6 +112,17 @@ class Robot:
         except FamilyError:
             return None
 
+    def numerical_solver(self, tip: str = "tool0") -> NumericalIK:
+        """The numerical IK of this robot's generated URDF, base_link -> ``tip``, within the
+        table's limits (built once per tip; :meth:`ik` falls back on it without a family)."""
+        solver = self._numerical_solvers.get(tip)
+        if solver is None:
+            from dhkin.ik.numerical import NumericalIK
+
+            solver = NumericalIK(self.reference(tip), self.lower, self.upper)
+            self._numerical_solvers[tip] = solver
+        return solver
+
     @property
     def has_closed_form(self) -> bool:
         """Whether a closed-form IK family fits this robot's table (within the band)."""
@@ -157,9 +147,7 @@ class Robot:
         """
         solver = self._closed_form_solver
         if solver is None:
-            from dhkin.ik.numerical import solver_for_robot
-
-            return solver_for_robot(self).solve(T, q_seed, tolerance=tolerance, tcp=tcp)
+            return self.numerical_solver().solve(T, q_seed, tolerance=tolerance, tcp=tcp)
         return solver.solve_one(T, q_seed, tolerance, tcp, copies)
 
     def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
@@ -177,9 +165,7 @@ class Robot:
         answers (``copies``, ``chunk_size`` and ``workers`` do not apply).
         """
         if self._closed_form_solver is None:
-            from dhkin.ik.numerical import solver_for_robot
-
-            return solver_for_robot(self).solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)
+            return self.numerical_solver().solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)
         batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
         return batch.q, batch.valid
 

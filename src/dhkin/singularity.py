@@ -82,8 +82,6 @@ it fails; its numerical measures remain available from ``robot.reference().manip
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -99,7 +97,7 @@ from dhkin.ik.geometry import table_scale
 from dhkin.transforms import rotation_angle
 
 if TYPE_CHECKING:
-    from dhkin.robot import Robot
+    from dhkin.arm import Arm
 
 KINDS: tuple[str, ...] = ("wrist", "elbow", "shoulder")
 #: Units of each kind's distance.
@@ -477,7 +475,7 @@ class SingularityModel:
         return placed
 
 
-def singularity_model(robot_or_table: Robot | DHTable) -> SingularityModel:
+def singularity_model(robot_or_table: Arm | DHTable) -> SingularityModel:
     """The analytic model of a robot or a table (FamilyError outside the families)."""
     table = robot_or_table if isinstance(robot_or_table, DHTable) else robot_or_table.table
     return SingularityModel(table)
@@ -633,7 +631,7 @@ class SingularityReport:
         return "\n".join(lines)
 
 
-def singularity_report(robot: Robot, q: ArrayLike,
+def singularity_report(robot: Arm, q: ArrayLike,
                        thresholds: Thresholds | Mapping[str, float] | None = None
                        ) -> SingularityReport:
     """Analytic singularity classes of one configuration q (6,), with Pinocchio's measures.
@@ -771,7 +769,7 @@ def line_poses(start: ArrayLike, end: ArrayLike, n: int) -> Array:
     return poses
 
 
-def solve_pose_path(robot: Robot, poses: ArrayLike, q_start: ArrayLike | None = None) -> Array:
+def solve_pose_path(robot: Arm, poses: ArrayLike, q_start: ArrayLike | None = None) -> Array:
     """Joint path of a pose path: each pose solved by IK, taking the solution nearest to the
     previous one (the first: nearest to ``q_start``, default zeros) and the previous solution as
     seed for a free joint at a singularity. UnreachableError naming the first unreachable pose
@@ -797,7 +795,7 @@ def solve_pose_path(robot: Robot, poses: ArrayLike, q_start: ArrayLike | None = 
     return path
 
 
-def analyse_path(robot: Robot, path: ArrayLike, q_start: ArrayLike | None = None,
+def analyse_path(robot: Arm, path: ArrayLike, q_start: ArrayLike | None = None,
                  thresholds: Thresholds | Mapping[str, float] | None = None,
                  rotation_length: float = 0.1, window: int = 2) -> PathAnalysis:
     """Where a path crosses or grazes a singularity, and how fast the joints race there.
@@ -927,53 +925,6 @@ def _event(kind: str, how: str, sample: float, arc: Array, poses: Array, distanc
                      position=position, distance=float(np.min(distance[first:last + 2])),
                      joint_speed=peak, blow_up=peak / median if median > 0 else float("inf"),
                      racing_joints=racing)
-
-
-# --------------------------------------------------------------------------------------------
-# Command line: `dhkin singularity ROBOT q... [--deg]` (wired into dhkin.cli)
-
-
-def add_singularity_arguments(parser: argparse.ArgumentParser) -> None:
-    """Arguments of `dhkin singularity`."""
-    parser.add_argument("robot", help="built-in robot name (see `dhkin robots`) or a table file")
-    parser.add_argument("q", type=float, nargs="+", help="joint values (rad and m, or --deg)")
-    parser.add_argument("--deg", action="store_true", help="revolute joint values in degrees")
-    for kind in KINDS:
-        parser.add_argument(f"--{kind}", type=float, default=DEFAULT_THRESHOLDS.of(kind),
-                            metavar="T", help=f"{kind} threshold ({DISTANCE_UNITS[kind]}, "
-                                              f"default {DEFAULT_THRESHOLDS.of(kind):g})")
-    parser.add_argument("--json", action="store_true", help="print the report as JSON")
-
-
-def cli_joint_values(robot: Robot, values: Sequence[float], degrees: bool,
-                     field: str) -> NDArray[np.float64]:
-    """Joint values given on the command line (option ``field``) -> SI; ``degrees`` converts
-    the revolute joints only. Raises InputError unless there is one value per joint."""
-    array = np.asarray(values, dtype=float)
-    if array.shape != (robot.dof,):
-        raise InputError(f"{field}: {robot.name} has {robot.dof} joints, got {array.size} "
-                         f"values", field=field)
-    revolute = np.array([j.is_revolute for j in robot.table.joints])
-    return np.where(revolute & degrees, np.radians(array), array)
-
-
-def cli_singularity(args: argparse.Namespace) -> int:
-    """`dhkin singularity`: print the report of one configuration; exit status 0."""
-    from dhkin.robot import load
-
-    robot = load(args.robot)
-    q = cli_joint_values(robot, args.q, bool(args.deg), "q")
-    thresholds = Thresholds(**{kind: getattr(args, kind) for kind in KINDS})
-    report = singularity_report(robot, q, thresholds)
-    if args.json:
-        print(json.dumps(report_to_json(report), indent=2))
-        return 0
-    if args.deg:
-        revolute = np.array([j.is_revolute for j in robot.table.joints])
-        shown = np.where(revolute, np.asarray(args.q, dtype=float), q)  # as given
-        print(f"q = {np.array2string(shown, precision=4)} (deg for revolute joints)")
-    print(report)
-    return 0
 
 
 def report_to_json(report: SingularityReport) -> dict[str, object]:

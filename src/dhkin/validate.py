@@ -4,8 +4,9 @@ An IK is a callable ``ik(T) -> iterable of joint vectors``: T is a 4x4 pose base
 in metres, joint vectors are URDF joint values in radians (metres for prismatic joints). Two
 optional keyword parameters are honoured when the callable declares them: ``q_seed`` (the sampled
 joint vector is passed, so that a solver can pick free joints at a singularity from it) and
-``robot`` (the :class:`~dhkin.robot.Robot` under test). :func:`adapt` wraps an IK that works in
-degrees or for another tool frame.
+``robot`` (the robot under test: a :class:`dhkin.robot.Robot`, or any
+:class:`~dhkin.arm.Arm`). :func:`adapt` wraps an IK that works in degrees or for another tool
+frame.
 
 Samples (fixed seed): ``uniform`` joint vectors within the limits; ``special`` vectors whose
 joints take the special angles 0, +-pi/2, pi (those inside the limits); ``near_singular``
@@ -75,9 +76,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.arm import Arm
 from dhkin.errors import DhkinError, FamilyError, InputError, URDFError
 from dhkin.reference import Reference
-from dhkin.robot import Robot
 from dhkin.transforms import invert, pose_error
 from dhkin.vendors import VENDOR_REFERENCES
 
@@ -186,7 +187,7 @@ class ReferenceSpec:
         return cls(**known)
 
 
-def resolve_reference(robot: Robot, reference: str | Path | ReferenceSpec | None = None,
+def resolve_reference(robot: Arm, reference: str | Path | ReferenceSpec | None = None,
                       base: str | None = None, tip: str | None = None) -> ReferenceSpec:
     """``reference`` ("rounded", the default; "exact"; a vendor URDF path; or a ReferenceSpec)
     with the vendor frames ``base`` / ``tip`` -> a :class:`ReferenceSpec`. A vendor file's frames
@@ -240,7 +241,7 @@ class TargetModel:
         return T if self._to_tool0 is None else T @ self._to_tool0
 
 
-def target_model(robot: Robot, reference: str | Path | ReferenceSpec | None = None,
+def target_model(robot: Arm, reference: str | Path | ReferenceSpec | None = None,
                  base: str | None = None, tip: str | None = None) -> TargetModel:
     """The Pinocchio model that makes the targets and checks the solutions (see
     :func:`resolve_reference`). Bad files, frames or chains raise InputError naming
@@ -443,7 +444,7 @@ class ValidationReport:
 # Sampling
 
 
-def sample_joint_vectors(robot: Robot, n: int, seed: int) -> tuple[NDArray[np.float64],
+def sample_joint_vectors(robot: Arm, n: int, seed: int) -> tuple[NDArray[np.float64],
                                                                     list[str]]:
     """n uniform + n/10 special-angle + n/10 near-singular joint vectors (at least 1 each)."""
     if n < 1:
@@ -470,7 +471,7 @@ def sample_joint_vectors(robot: Robot, n: int, seed: int) -> tuple[NDArray[np.fl
     return np.vstack(parts), sets
 
 
-def perturbed_seeds(robot: Robot, q: NDArray[np.float64], sets: list[str],
+def perturbed_seeds(robot: Arm, q: NDArray[np.float64], sets: list[str],
                     seed: int) -> NDArray[np.float64]:
     """Seeds of the continuity check: q with each revolute joint moved by +-SEED_PERTURBATION
     (random signs from ``seed``), clipped to the limits, for samples in CONTINUITY_SETS; NaN rows
@@ -512,7 +513,7 @@ def adapt(ik: IKCallable, degrees: bool = False, tool: ArrayLike | None = None) 
     return adapted
 
 
-def own_ik(robot: Robot) -> IKCallable:
+def own_ik(robot: Arm) -> IKCallable:
     """dhkin's own IK of ``robot`` as a validation callable.
 
     The closed-form IK takes the sampled q as seed (it only uses it for free joints at a
@@ -553,7 +554,7 @@ def _takes_seed(ik: IKCallable) -> bool:
     return "q_seed" in inspect.signature(ik).parameters
 
 
-def _call(ik: IKCallable, robot: Robot, T: NDArray[np.float64],
+def _call(ik: IKCallable, robot: Arm, T: NDArray[np.float64],
           q_seed: NDArray[np.float64]) -> list[NDArray[np.float64]]:
     parameters = inspect.signature(ik).parameters
     kwargs: dict[str, Any] = {}
@@ -571,13 +572,13 @@ def _call(ik: IKCallable, robot: Robot, T: NDArray[np.float64],
 # Checking
 
 
-def _wrap(robot: Robot, difference: NDArray[np.float64]) -> NDArray[np.float64]:
+def _wrap(robot: Arm, difference: NDArray[np.float64]) -> NDArray[np.float64]:
     """Joint differences with revolute joints wrapped to (-pi, pi] (prismatic ones as they are)."""
     revolute = np.array([j.is_revolute for j in robot.table.joints])
     return np.where(revolute, np.pi - np.mod(np.pi - difference, 2.0 * np.pi), difference)
 
 
-def _configuration_labels(robot: Robot, targets: NDArray[np.float64],
+def _configuration_labels(robot: Arm, targets: NDArray[np.float64],
                           q: NDArray[np.float64]) -> list[str]:
     """Configuration of each sampled q according to dhkin's closed-form solver ('' if none)."""
     try:
@@ -598,12 +599,12 @@ def _configuration_labels(robot: Robot, targets: NDArray[np.float64],
     return labels
 
 
-def _wrist_singular(robot: Robot, q: NDArray[np.float64]) -> bool:
+def _wrist_singular(robot: Arm, q: NDArray[np.float64]) -> bool:
     return (robot.dof > WRIST_JOINT and robot.table.joints[WRIST_JOINT].is_revolute
             and abs(np.sin(q[WRIST_JOINT])) <= WRIST_SINGULAR)
 
 
-def _compared_joints(robot: Robot, q_sampled: NDArray[np.float64],
+def _compared_joints(robot: Arm, q_sampled: NDArray[np.float64],
                      seeded: bool) -> NDArray[np.int64]:
     """Joints the missing check compares (all, except at the wrist singularity without seed)."""
     if _wrist_singular(robot, q_sampled) and not seeded:
@@ -621,7 +622,7 @@ class _Checked:
     rotation: NDArray[np.float64]
 
 
-def _resolvable(robot: Robot, q: NDArray[np.float64], joint_tolerance: float,
+def _resolvable(robot: Arm, q: NDArray[np.float64], joint_tolerance: float,
                 noise: float = POSE_ROUNDING) -> float:
     """Joint distance under which two solutions of one pose count as the same at q:
     joint_tolerance + noise / sigma_min of Pinocchio's Jacobian (6 x n) at q, with ``noise``
@@ -631,7 +632,7 @@ def _resolvable(robot: Robot, q: NDArray[np.float64], joint_tolerance: float,
     return joint_tolerance + noise / max(float(sigma.min()), 1e-300)
 
 
-def _matched(robot: Robot, model: TargetModel, Q: NDArray[np.float64], q: NDArray[np.float64],
+def _matched(robot: Arm, model: TargetModel, Q: NDArray[np.float64], q: NDArray[np.float64],
              joints: NDArray[np.int64], joint_tolerance: float,
              residual: float = 0.0) -> tuple[bool, float]:
     """Whether some row of Q is q (mod 2pi on ``joints``, widened by :func:`_resolvable` with
@@ -643,7 +644,7 @@ def _matched(robot: Robot, model: TargetModel, Q: NDArray[np.float64], q: NDArra
     return found, closest
 
 
-def _verify(robot: Robot, model: TargetModel, T: NDArray[np.float64],
+def _verify(robot: Arm, model: TargetModel, T: NDArray[np.float64],
             returned: list[NDArray[np.float64]], tolerance: float
             ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], str]:
     """Finite solutions, their residuals on the reference, and what is wrong with them ('')."""
@@ -667,7 +668,7 @@ def _verify(robot: Robot, model: TargetModel, T: NDArray[np.float64],
     return Q, position, rotation, ""
 
 
-def _check_sample(robot: Robot, model: TargetModel, q_sampled: NDArray[np.float64],
+def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64],
                   T: NDArray[np.float64], returned: list[NDArray[np.float64]], tolerance: float,
                   joint_tolerance: float, seeded: bool) -> tuple[_Checked, NDArray[np.float64]]:
     """wrong / no_solution / missing / success of the first call, and its finite solutions."""
@@ -687,7 +688,7 @@ def _check_sample(robot: Robot, model: TargetModel, q_sampled: NDArray[np.float6
     return _Checked("success", "", position, rotation), Q
 
 
-def _missing_branches(robot: Robot, model: TargetModel, T: NDArray[np.float64],
+def _missing_branches(robot: Arm, model: TargetModel, T: NDArray[np.float64],
                       q_sampled: NDArray[np.float64], Q: NDArray[np.float64], tolerance: float,
                       joint_tolerance: float) -> list[tuple[str, float]]:
     """(configuration, closest distance) of each closed-form branch of T that Q lacks.
@@ -718,7 +719,7 @@ def _missing_branches(robot: Robot, model: TargetModel, T: NDArray[np.float64],
     return missing
 
 
-def _nearest_to_seed(robot: Robot, Q: NDArray[np.float64],
+def _nearest_to_seed(robot: Arm, Q: NDArray[np.float64],
                      seed: NDArray[np.float64]) -> tuple[float, int]:
     """Largest joint distance (mod 2pi) of the solution nearest ``seed``, and its joint."""
     distance = np.abs(_wrap(robot, Q - seed))
@@ -735,7 +736,7 @@ def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> It
     return tqdm(iterable, total=total, desc=label, unit="pose", leave=False, file=sys.stderr)
 
 
-def validate(robot: Robot, ik: IKCallable | None = None, n: int = 10_000, seed: int = 0,
+def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: int = 0,
              tolerance: float = 1e-9, joint_tolerance: float = 1e-6,
              progress: bool = False, ik_name: str | None = None,
              complete_expected: bool | None = None,
@@ -761,7 +762,7 @@ def validate(robot: Robot, ik: IKCallable | None = None, n: int = 10_000, seed: 
                 ik_name or str(getattr(callable_ik, "__name__", "ik")), complete_expected)
 
 
-def _run(robot: Robot, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
+def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
          sets: list[str], perturbed: NDArray[np.float64], seed: int, tolerance: float,
          joint_tolerance: float, progress: bool, ik_name: str,
          complete_expected: bool = True) -> ValidationReport:
@@ -843,7 +844,7 @@ def _run(robot: Robot, model: TargetModel, ik: IKCallable, q: NDArray[np.float64
     return report
 
 
-def _check_continuity(robot: Robot, model: TargetModel, ik: IKCallable, T: NDArray[np.float64],
+def _check_continuity(robot: Arm, model: TargetModel, ik: IKCallable, T: NDArray[np.float64],
                       seed: NDArray[np.float64], tolerance: float,
                       all_position: list[NDArray[np.float64]],
                       all_rotation: list[NDArray[np.float64]]
@@ -887,7 +888,7 @@ def write_failures(report: ValidationReport, path: str | Path) -> Path:
     return file
 
 
-def replay(robot: Robot, ik: IKCallable, path: str | Path, ik_name: str | None = None,
+def replay(robot: Arm, ik: IKCallable, path: str | Path, ik_name: str | None = None,
            reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
            tip: str | None = None, complete_expected: bool | None = None) -> ValidationReport:
     """Rerun the samples of a failure file with ``ik`` and check them again, on the reference
@@ -924,7 +925,7 @@ def replay(robot: Robot, ik: IKCallable, path: str | Path, ik_name: str | None =
                 ik_name or str(getattr(ik, "__name__", "ik")), complete_expected)
 
 
-def tool_frame_from_robot(robot: Robot, frame: str) -> NDArray[np.float64]:
+def tool_frame_from_robot(robot: Arm, frame: str) -> NDArray[np.float64]:
     """tool0 -> ``frame`` of the generated URDF (constant), for :func:`adapt`'s ``tool``."""
     reference = robot.reference()
     q = np.zeros(robot.dof)

@@ -58,23 +58,38 @@ from __future__ import annotations
 
 import math
 import re
-import weakref
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, TypeAlias
+from typing import Any, Literal, Protocol, TypeAlias
 
 import eigenpy
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.builtin import resolve_table_path
+from dhkin.dh import DHTable, load_table
 from dhkin.errors import InputError, URDFError
 from dhkin.ik.result import Configuration, IKSolutions
 from dhkin.reference import Reference
+from dhkin.urdf import generate
 
-if TYPE_CHECKING:
-    from dhkin.robot import Robot
+
+class RobotLike(Protocol):
+    """What :meth:`NumericalIK.from_robot` and :func:`numerical_ik` need of a robot (a
+    :class:`dhkin.robot.Robot` is one; this module does not import the facade above it)."""
+
+    @property
+    def lower(self) -> NDArray[np.float64]: ...
+
+    @property
+    def upper(self) -> NDArray[np.float64]: ...
+
+    def reference(self, tip: str = "tool0") -> Reference: ...
+
+    def numerical_solver(self, tip: str = "tool0") -> NumericalIK: ...
+
 
 Mode: TypeAlias = Literal["pose", "position"]
 Method: TypeAlias = Literal["lm", "dls", "newton"]
@@ -359,10 +374,18 @@ class NumericalIK:
 
     # ----------------------------------------------------------------------------- building
     @classmethod
-    def from_robot(cls, robot: Robot, tip: str = "tool0",
+    def from_robot(cls, robot: RobotLike, tip: str = "tool0",
                    settings: SolverSettings | None = None) -> NumericalIK:
         """Solver of a DH-table robot on its generated URDF, base_link -> ``tip``, table limits."""
         return cls(robot.reference(tip), robot.lower, robot.upper, settings)
+
+    @classmethod
+    def from_table(cls, table: DHTable, tip: str = "tool0",
+                   settings: SolverSettings | None = None) -> NumericalIK:
+        """Solver of a DH table on its generated URDF (through xacro), base_link -> ``tip``,
+        within the table's limits."""
+        reference = Reference(generate(table).urdf, tip=tip, source=f"{table.name}.urdf")
+        return cls(reference, table.lower, table.upper, settings)
 
     @classmethod
     def from_urdf(cls, path: str | Path, tip: str, base: str | None = None,
@@ -1121,19 +1144,7 @@ def _count(name: str, value: int, minimum: int) -> int:
 
 
 # ----------------------------------------------------------------------------- conveniences
-_ROBOT_SOLVERS: weakref.WeakKeyDictionary[Robot, dict[str, NumericalIK]] = (
-    weakref.WeakKeyDictionary())
-
-
-def solver_for_robot(robot: Robot, tip: str = "tool0") -> NumericalIK:
-    """The (cached) numerical solver of a DH-table robot, base_link -> ``tip``."""
-    per_tip = _ROBOT_SOLVERS.setdefault(robot, {})
-    if tip not in per_tip:
-        per_tip[tip] = NumericalIK.from_robot(robot, tip)
-    return per_tip[tip]
-
-
-def numerical_ik(robot_or_urdf: Robot | Reference | NumericalIK | str | Path, target: ArrayLike,
+def numerical_ik(robot_or_urdf: RobotLike | Reference | NumericalIK | str | Path, target: ArrayLike,
                  q_seed: ArrayLike | None = None, *, tip: str | None = None,
                  base: str | None = None, **options: object) -> IKSolutions:
     """Numerical IK in one call.
@@ -1146,19 +1157,18 @@ def numerical_ik(robot_or_urdf: Robot | Reference | NumericalIK | str | Path, ta
     return solver.solve(target, q_seed, **options)  # type: ignore[arg-type]
 
 
-def _solver_of(source: Robot | Reference | NumericalIK | str | Path, tip: str | None,
+def _solver_of(source: RobotLike | Reference | NumericalIK | str | Path, tip: str | None,
                base: str | None) -> NumericalIK:
-    from dhkin.robot import Robot, load
-
     if isinstance(source, NumericalIK):
         return source
     if isinstance(source, Reference):
         return NumericalIK(source)
-    if isinstance(source, Robot):
-        return solver_for_robot(source, tip or "tool0")
+    if not isinstance(source, str | Path):  # a robot: its cached solver
+        return source.numerical_solver(tip or "tool0")
     path = Path(source)
     if path.suffix == ".urdf":
         if tip is None:
-            raise InputError(f"{path}: a URDF needs the tip frame (tip=...)")
+            raise InputError(f"{path}: a URDF needs the tip frame (tip=...)", field="tip",
+                             expected="the tip frame of the URDF's chain")
         return NumericalIK.from_urdf(path, tip, base)
-    return solver_for_robot(load(source), tip or "tool0")
+    return NumericalIK.from_table(load_table(resolve_table_path(source)), tip or "tool0")

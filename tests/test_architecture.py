@@ -20,7 +20,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                     "dhkin.urdf", "dhkin.validators", "dhkin.vendors", "dhkin.fit",
                     "dhkin.builtin")),
     ("kinematics", ("dhkin.ik", "dhkin.ik.*", "dhkin.arm")),
-    ("analysis", ("dhkin.singularity", "dhkin.maps", "dhkin.validate", "dhkin.compare")),
+    ("analysis", ("dhkin.singularity", "dhkin.singularity.*", "dhkin.maps", "dhkin.maps.*",
+                  "dhkin.validate", "dhkin.validate.*", "dhkin.compare")),
     ("facade", ("dhkin.robot",)),
     ("application", ("dhkin", "dhkin.checks", "dhkin.cli")),
 )

@@ -33,22 +33,29 @@ cells through which they pass marked as loci.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.dh import DHTable
 from dhkin.errors import InputError
+from dhkin.maps.branches import (
+    CHUNK,
+    DEFAULT_RESOLUTION,
+    DEFAULT_RPY,
+    PLANES,
+    Array,
+    BranchSolver,
+    Mask,
+    _check_resolution,
+    _chunks,
+)
 from dhkin.singularity import (
     DEFAULT_THRESHOLDS,
-    KINDS,
     SingularityModel,
     singularity_model,
 )
@@ -57,103 +64,12 @@ from dhkin.transforms import xyz_rpy_to_matrix
 if TYPE_CHECKING:
     from dhkin.arm import Arm
 
-Array = NDArray[np.float64]
-Mask = NDArray[np.bool_]
-
-PLANES: dict[str, tuple[int, int, int]] = {"xz": (0, 2, 1), "yz": (1, 2, 0), "xy": (0, 1, 2)}
-AXIS_NAMES = "xyz"
-#: Default tool0 orientation (URDF rpy, rad) of the workspace slice, per family, chosen so that
-#: the x-z slice crosses wrist singular loci. Spherical wrist: tool0 z along +x, in the slice
-#: (singular where the forearm, axis 4, is horizontal). Offset wrist: axis 4 stays parallel to
-#: axis 2, i.e. horizontal and across the arm, so the wrist is singular only with a horizontal
-#: tool axis across the arm: tool0 z horizontal at 45 deg to the slice (loci: vertical lines).
-DEFAULT_RPY: dict[str, tuple[float, float, float]] = {
-    "spherical_wrist": (0.0, math.pi / 2, 0.0),
-    "stanford": (0.0, math.pi / 2, 0.0),
-    "offset_wrist": (0.0, math.pi / 2, math.pi / 4),
-}
-DEFAULT_RESOLUTION = 161
-DEFAULT_JOINT_RESOLUTION = 181
 #: Bisection steps that locate the workspace boundary between two cells (2^-24 of a cell).
 BOUNDARY_BISECTIONS = 24
+
+
 #: Samples on the segment through a boundary cell searched for zeros (about 8 per cell).
 SEGMENT_SAMPLES = 17
-#: Poses per IK batch (memory: the batch holds every 2pi copy before it is reduced).
-CHUNK = 2000
-#: Figure size (inches) and resolution: the PNG is FIGURE_SIZE * DPI pixels.
-FIGURE_SIZE = (18.0, 6.4)
-DPI = 100
-KIND_STYLE: dict[str, dict[str, str]] = {
-    "wrist": {"color": "#e41a1c", "marker": "o", "label": "wrist singular"},
-    "elbow": {"color": "#00e5ff", "marker": "s", "label": "elbow singular (stretched/folded)"},
-    "shoulder": {"color": "#ff8c00", "marker": "D", "label": "shoulder singular"},
-}
-MEASURE_LABEL = "Yoshikawa manipulability |det J| (m$^3$)"
-
-
-# --------------------------------------------------------------------------------------------
-# IK over distinct branches
-
-
-def principal_table(table: DHTable) -> DHTable:
-    """The same table with every revolute joint limited to [-pi, pi]: IK then returns one copy
-    per branch instead of every 2pi copy within the real limits."""
-    joints = tuple(dataclasses.replace(j, lower=-math.pi, upper=math.pi) if j.is_revolute else j
-                   for j in table.joints)
-    return dataclasses.replace(table, joints=joints)
-
-
-def has_copy_within_limits(table: DHTable, q: Array) -> Mask:
-    """Whether some 2pi-shifted copy of each q (..., n) lies within the table's limits."""
-    lower, upper = table.lower, table.upper
-    revolute = np.array([j.is_revolute for j in table.joints])
-    two_pi = 2.0 * math.pi
-    first = np.ceil((lower - 1e-10 - q) / two_pi)
-    last = np.floor((upper + 1e-10 - q) / two_pi)
-    inside = np.where(revolute, first <= last, (q >= lower - 1e-10) & (q <= upper + 1e-10))
-    return np.all(inside, axis=-1)
-
-
-class BranchSolver:
-    """IK of many poses, one solution per branch: q (N, B, n) and valid (N, B)."""
-
-    def __init__(self, robot: Arm) -> None:
-        from dhkin.ik.family import fit_family
-        from dhkin.ik.solver import ClosedFormSolver
-
-        self.table = robot.table
-        principal = principal_table(robot.table)
-        self.principal = ClosedFormSolver(principal, fit_family(principal))
-        self.n_branches = len(self.principal.branch_labels)
-
-    def solve(self, T: Array) -> tuple[Array, Mask]:
-        n = len(T)
-        q = np.zeros((n, self.n_branches, self.table.dof))
-        valid = np.zeros((n, self.n_branches), bool)
-        if n == 0:
-            return q, valid
-        batch = self.principal.solve_batch(T)
-        pose, slot = np.nonzero(batch.valid)
-        branch = batch.branch[pose, slot]
-        q[pose, branch] = batch.q[pose, slot]
-        valid[pose, branch] = True
-        valid &= has_copy_within_limits(self.table, q)
-        return q, valid
-
-
-def _chunks(n: int, size: int, progress: bool, label: str) -> Iterator[slice]:
-    starts = range(0, n, size)
-    if progress:
-        from tqdm import tqdm
-
-        starts = tqdm(starts, total=math.ceil(n / size), desc=label, unit="chunk",
-                      file=sys.stderr, leave=False)
-    for start in starts:
-        yield slice(start, min(start + size, n))
-
-
-# --------------------------------------------------------------------------------------------
-# Workspace slice
 
 
 @dataclass(frozen=True)
@@ -306,13 +222,6 @@ def workspace_slice(robot: Arm, plane: str = "xz", offset: float = 0.0,
                           u=u, v=v, manipulability=best.reshape(grid),
                           solutions=count.reshape(grid), distances=minimum, loci=loci,
                           boundary=boundary)
-
-
-def _check_resolution(resolution: int) -> None:
-    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) \
-            or not 8 <= resolution <= 2000:
-        raise InputError(f"resolution: expected an integer from 8 to 2000, "
-                         f"got {resolution!r}", field="resolution")
 
 
 def _boundary_cells(reachable: Mask) -> Mask:
@@ -518,245 +427,3 @@ def _bisect_boundary(solver: BranchSolver, plane: str, offset: float, rotation: 
         low = np.where(ok[:, None], middle, low)
         high = np.where(ok[:, None], high, middle)
     return low
-
-
-# --------------------------------------------------------------------------------------------
-# Joint-space slices
-
-
-@dataclass(frozen=True)
-class JointSlice:
-    """|det J| over two joints (1-based ``joints``), the others at ``q_fixed``.
-
-    Grids have shape (len(v), len(u)); ``u`` holds joint ``joints[0]``'s values, ``v`` joint
-    ``joints[1]``'s (rad, or m for a prismatic joint). ``signed[kind]`` is the kind's signed
-    factor, ``loci[kind]`` the cells its zero set passes through.
-    """
-
-    robot: str
-    joints: tuple[int, int]
-    q_fixed: Array
-    u: Array
-    v: Array
-    manipulability: Array
-    signed: dict[str, Array]
-    loci: dict[str, Mask]
-
-
-def default_fixed_q(robot: Arm) -> Array:
-    """Joint values held fixed in the joint slices: 0 (clipped to the limits), except joint 2 at
-    30 deg (away from the upright pose, where the stretched arm puts the wrist centre on axis 1)
-    and joint 5 at theta5 = 90 deg (farthest from the wrist singularity), each when within its
-    limits."""
-    q = np.clip(np.zeros(robot.dof), robot.lower, robot.upper)
-    shoulder = robot.table.joints[1]
-    if shoulder.is_revolute and shoulder.lower <= math.pi / 6 <= shoulder.upper:
-        q[1] = math.pi / 6
-    wrist = robot.table.joints[4]
-    if wrist.is_revolute:
-        value = (math.pi / 2 - wrist.offset) / wrist.direction
-        if wrist.lower <= value <= wrist.upper:
-            q[4] = value
-    return q
-
-
-def joint_slice(robot: Arm, joints: tuple[int, int] = (2, 3), q_fixed: ArrayLike | None = None,
-                resolution: int = DEFAULT_JOINT_RESOLUTION) -> JointSlice:
-    """|det J| and singular loci on a grid of two joints over their limits (one turn, centred
-    on 0, for a joint whose limits span more), the others at ``q_fixed`` (default:
-    :func:`default_fixed_q`)."""
-    _check_resolution(resolution)
-    model = singularity_model(robot)
-    if len(joints) != 2 or len(set(joints)) != 2 or not all(
-            isinstance(j, (int, np.integer)) and 1 <= j <= robot.dof for j in joints):
-        raise InputError(f"joints: expected two different joint numbers 1..{robot.dof}, "
-                         f"got {joints!r}", field="joints")
-    fixed = default_fixed_q(robot) if q_fixed is None else np.asarray(q_fixed, dtype=float)
-    if fixed.shape != (robot.dof,) or not np.all(np.isfinite(fixed)):
-        raise InputError(f"q_fixed: expected {robot.dof} finite joint values, got "
-                         f"{np.asarray(q_fixed).tolist()!r}", field="q_fixed")
-    first, second = joints[0] - 1, joints[1] - 1
-    u = np.linspace(*_slice_range(robot.table, first), resolution)
-    v = np.linspace(*_slice_range(robot.table, second), resolution)
-    uu, vv = np.meshgrid(u, v)
-    Q = np.repeat(fixed[None], uu.size, axis=0)
-    Q[:, first] = uu.ravel()
-    Q[:, second] = vv.ravel()
-    factors = model.factors(Q)
-    grid = uu.shape
-    signed = {kind: factors.signed(kind).reshape(grid) for kind in model.kinds}
-    loci = {kind: _sign_change_cells(values) for kind, values in signed.items()}
-    return JointSlice(robot=robot.name, joints=(int(joints[0]), int(joints[1])), q_fixed=fixed,
-                      u=u, v=v, manipulability=np.abs(factors.determinant).reshape(grid),
-                      signed=signed, loci=loci)
-
-
-def _slice_range(table: DHTable, joint: int) -> tuple[float, float]:
-    """A joint's limits, or one turn [-pi, pi] centred on 0 when they span more than a turn (the
-    kinematics repeat every turn)."""
-    info = table.joints[joint]
-    if info.is_revolute and info.upper - info.lower > 2 * math.pi:
-        return -math.pi, math.pi
-    return info.lower, info.upper
-
-
-def _sign_change_cells(values: Array) -> Mask:
-    """Cells at a zero of ``values`` or, of two neighbours of opposite sign, the smaller one."""
-    marked = values == 0
-    for axis in (0, 1):
-        a = np.moveaxis(values, axis, 0)
-        out = np.moveaxis(marked, axis, 0)
-        change = np.sign(a[:-1]) * np.sign(a[1:]) < 0
-        first_smaller = np.abs(a[:-1]) <= np.abs(a[1:])
-        out[:-1] |= change & first_smaller
-        out[1:] |= change & ~first_smaller
-    return marked
-
-
-# --------------------------------------------------------------------------------------------
-# Figure
-
-
-@dataclass(frozen=True)
-class SingularityMaps:
-    """What :func:`draw_maps` computed and drew."""
-
-    workspace: WorkspaceSlice
-    joint_slices: tuple[JointSlice, ...]
-    path: Path
-
-
-def draw_maps(robot: Arm, output: str | Path, plane: str = "xz", offset: float = 0.0,
-              rpy: Sequence[float] | None = None, resolution: int = DEFAULT_RESOLUTION,
-              joint_resolution: int = DEFAULT_JOINT_RESOLUTION,
-              q_fixed: ArrayLike | None = None, progress: bool = False) -> SingularityMaps:
-    """Compute a workspace slice and the q2-q3 and q3-q5 joint slices; write them as one PNG
-    of FIGURE_SIZE * DPI pixels to ``output``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    path = Path(output)
-    if path.suffix.lower() != ".png":
-        raise InputError(f"output: expected a .png file name, got {str(output)!r}", field="output")
-    if not path.parent.exists():
-        raise InputError(f"output: folder {str(path.parent)!r} does not exist", field="output")
-    workspace = workspace_slice(robot, plane, offset, rpy, resolution=resolution,
-                                progress=progress)
-    slices = (joint_slice(robot, (2, 3), q_fixed, joint_resolution),
-              joint_slice(robot, (3, 5), q_fixed, joint_resolution))
-    figure, axes = plt.subplots(1, 3, figsize=FIGURE_SIZE, dpi=DPI,
-                                gridspec_kw={"width_ratios": [1.25, 1, 1]})
-    _draw_workspace(axes[0], figure, workspace)
-    for ax, data in zip(axes[1:], slices, strict=True):
-        _draw_joint_slice(ax, figure, robot, data)
-    model = singularity_model(robot)
-    figure.suptitle(f"{robot.name} ({model.family.replace('_', ' ')}): manipulability "
-                    f"|det J| and singular loci", fontsize=15)
-    figure.tight_layout(rect=(0, 0, 1, 0.95))
-    figure.savefig(path, dpi=DPI)
-    plt.close(figure)
-    return SingularityMaps(workspace=workspace, joint_slices=slices, path=path)
-
-
-def _draw_workspace(ax, figure, data: WorkspaceSlice) -> None:
-    from matplotlib.lines import Line2D
-
-    iu, iv, normal = PLANES[data.plane]
-    image = ax.pcolormesh(data.u, data.v, np.ma.masked_invalid(data.manipulability),
-                          shading="nearest", cmap="viridis")
-    colorbar = figure.colorbar(image, ax=ax, fraction=0.046, pad=0.03)
-    colorbar.set_label(MEASURE_LABEL + ", best over IK solutions")
-    ax.contour(data.u, data.v, data.reachable.astype(float), levels=[0.5], colors="0.35",
-               linewidths=0.8)
-    handles = [Line2D([], [], color="0.35", lw=0.8, label="reach boundary (blank: unreachable)")]
-    uu, vv = np.meshgrid(data.u, data.v)
-    for kind in ("shoulder", "elbow", "wrist"):  # wrist loci drawn on top
-        if kind not in data.loci or not data.loci[kind].any():
-            continue
-        style = KIND_STYLE[kind]
-        mask = data.loci[kind]
-        ax.scatter(uu[mask], vv[mask], s=7, c=style["color"], marker=style["marker"],
-                   linewidths=0)
-        handles.append(Line2D([], [], color=style["color"], marker=style["marker"], ls="",
-                              label=style["label"]))
-    ax.legend(handles=handles, loc="lower left", fontsize=8, framealpha=0.85)
-    ax.set_aspect("equal")
-    ax.set_xlabel(f"{AXIS_NAMES[iu]} (m, base_link)")
-    ax.set_ylabel(f"{AXIS_NAMES[iv]} (m, base_link)")
-    rpy_deg = ", ".join(f"{math.degrees(a):.0f}" for a in data.rpy)
-    ax.set_title(f"Workspace slice {AXIS_NAMES[normal]} = {data.offset:g} m, tool0 rpy "
-                 f"({rpy_deg}) deg\n(tool0 z along {_direction_text(data.rotation[:, 2])})",
-                 fontsize=11)
-
-
-def _direction_text(vector: Array) -> str:
-    parts = [f"{value:+.2f}{name}" for value, name in zip(vector, AXIS_NAMES, strict=True)
-             if abs(value) > 5e-3]
-    return " ".join(parts)
-
-
-def _joint_label(robot: Arm, joint: int) -> tuple[str, float]:
-    info = robot.table.joints[joint - 1]
-    if info.is_revolute:
-        return f"q{joint} {info.name} (deg)", 180.0 / math.pi
-    return f"q{joint} {info.name} (m)", 1.0
-
-
-def _draw_joint_slice(ax, figure, robot: Arm, data: JointSlice) -> None:
-    from matplotlib.lines import Line2D
-
-    u_label, u_scale = _joint_label(robot, data.joints[0])
-    v_label, v_scale = _joint_label(robot, data.joints[1])
-    u, v = data.u * u_scale, data.v * v_scale
-    image = ax.pcolormesh(u, v, data.manipulability, shading="nearest", cmap="viridis")
-    colorbar = figure.colorbar(image, ax=ax, fraction=0.046, pad=0.03)
-    colorbar.set_label(MEASURE_LABEL)
-    handles = []
-    for kind in KINDS:
-        if kind not in data.signed:
-            continue
-        values = data.signed[kind]
-        if not (np.nanmin(values) <= 0 <= np.nanmax(values)):
-            continue
-        style = KIND_STYLE[kind]
-        dashes = "--" if kind == "shoulder" else "-"
-        ax.contour(u, v, values, levels=[0.0], colors=style["color"], linewidths=1.8,
-                   linestyles=dashes)
-        handles.append(Line2D([], [], color=style["color"], lw=1.8, ls=dashes,
-                              label=style["label"]))
-    if handles:
-        ax.legend(handles=handles, loc="lower left", fontsize=8, framealpha=0.85)
-    ax.set_xlabel(u_label)
-    ax.set_ylabel(v_label)
-    others = [k for k in range(1, robot.dof + 1) if k not in data.joints]
-    fixed = ", ".join(f"q{k} = {_format_joint(robot, k, data.q_fixed[k - 1])}" for k in others)
-    ax.set_title(f"Joint slice q{data.joints[0]}-q{data.joints[1]}\n({fixed})", fontsize=11)
-
-
-def _format_joint(robot: Arm, joint: int, value: float) -> str:
-    if robot.table.joints[joint - 1].is_revolute:
-        return f"{math.degrees(value):.0f} deg"
-    return f"{value:.3g} m"
-
-
-def describe(maps: SingularityMaps) -> str:
-    """What a figure shows, in words and counts."""
-    workspace = maps.workspace
-    normal = PLANES[workspace.plane][2]
-    rpy_deg = ", ".join(f"{math.degrees(a):.1f}" for a in workspace.rpy)
-    cells = workspace.manipulability.size
-    reachable = int(workspace.reachable.sum())
-    best = float(np.nanmax(workspace.manipulability)) if reachable else float("nan")
-    lines = [f"wrote {maps.path} ({int(FIGURE_SIZE[0] * DPI)} x {int(FIGURE_SIZE[1] * DPI)} px)",
-             f"workspace slice {AXIS_NAMES[normal]} = {workspace.offset:g} m, tool0 rpy "
-             f"({rpy_deg}) deg: {reachable} of {cells} cells reachable, best |det J| "
-             f"{best:.4g} m^3",
-             "  cells on singular loci: " + ", ".join(
-                 f"{kind} {int(mask.sum())}" for kind, mask in workspace.loci.items())]
-    for data in maps.joint_slices:
-        lines.append(f"joint slice q{data.joints[0]}-q{data.joints[1]}: max |det J| "
-                     f"{float(np.max(data.manipulability)):.4g} m^3; cells on loci: "
-                     + ", ".join(f"{kind} {int(mask.sum())}" for kind, mask in data.loci.items()))
-    return "\n".join(lines)

@@ -1,0 +1,100 @@
+"""The factors of det J (shoulder, elbow, wrist) of N configurations, and the joint axes they are
+computed from (see :mod:`dhkin.singularity.model`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dhkin.dh import DHTable
+from dhkin.errors import InputError
+from dhkin.singularity.thresholds import KINDS, Array
+
+if TYPE_CHECKING:
+    pass
+
+
+@dataclass(frozen=True)
+class Factors:
+    """Signed factors of det J for N configurations: ``det J = constant * shoulder * elbow *
+    wrist`` (for the Stanford arm ``elbow`` holds the extension e, m, and is no singularity).
+
+    All arrays have shape (N,). ``*_distance`` are the distances of the module docstring
+    (``elbow_distance`` is NaN for the Stanford arm, which has no elbow).
+    """
+
+    family: str
+    constant: Array
+    shoulder: Array
+    elbow: Array
+    wrist: Array
+    shoulder_distance: Array
+    elbow_distance: Array
+
+    @property
+    def determinant(self) -> Array:
+        """det J of the 6x6 joint Jacobian (any frame, any point on the last body)."""
+        return self.constant * self.shoulder * self.elbow * self.wrist
+
+    @property
+    def wrist_distance(self) -> Array:
+        return np.abs(self.wrist)
+
+    def distance(self, kind: str) -> Array:
+        """The distance of one kind, (N,)."""
+        if kind == "wrist":
+            return self.wrist_distance
+        if kind == "elbow":
+            return self.elbow_distance
+        if kind == "shoulder":
+            return self.shoulder_distance
+        raise InputError(f"kind: expected one of {list(KINDS)}, got {kind!r}", field="kind")
+
+    def signed(self, kind: str) -> Array:
+        """The signed factor whose zero is that singularity, (N,)."""
+        if kind == "wrist":
+            return self.wrist
+        if kind == "elbow":
+            return self.elbow
+        if kind == "shoulder":
+            return self.shoulder
+        raise InputError(f"kind: expected one of {list(KINDS)}, got {kind!r}", field="kind")
+
+    def __getitem__(self, index: int | slice | NDArray[np.int64]) -> Factors:
+        return Factors(self.family, *(np.atleast_1d(getattr(self, name)[index]) for name in
+                                      ("constant", "shoulder", "elbow", "wrist",
+                                       "shoulder_distance", "elbow_distance")))
+
+
+def _dot(a: Array, b: Array) -> Array:
+    """Dot products along the last axis."""
+    return np.sum(a * b, axis=-1)
+
+
+def joint_axes(table: DHTable, q: ArrayLike) -> tuple[Array, Array]:
+    """Points o_k (N, n, 3) and unit directions z_k (N, n, 3) of the joint axes in base_link.
+
+    Axis k is the z axis of DH frame k-1 (standard DH) or k (modified DH), oriented so that
+    increasing theta_k turns right-handed about it (multiply by ``direction`` for q_k).
+    """
+    frames = table.fk_frames(q)
+    first = 0 if table.convention == "standard" else 1
+    chosen = frames[:, first:first + table.dof]
+    return chosen[..., :3, 3], chosen[..., :3, 2]
+
+
+def _closest_point(p1: Array, z1: Array, p2: Array, z2: Array) -> Array:
+    """Midpoint of the shortest segment between lines (p1, z1) and (p2, z2) (unit z, not
+    parallel), batched over leading axes."""
+    w0 = p1 - p2
+    b = _dot(z1, z2)
+    d = _dot(z1, w0)
+    e = _dot(z2, w0)
+    denominator = 1.0 - b * b
+    t1 = (b * e - d) / denominator
+    t2 = (e - b * d) / denominator
+    return 0.5 * ((p1 + t1[..., None] * z1) + (p2 + t2[..., None] * z2))

@@ -1,0 +1,436 @@
+"""Cross-validation of any IK callable against an oracle: Pinocchio on a *reference description*.
+
+An IK is a callable ``ik(T) -> iterable of joint vectors``: T is a 4x4 pose base_link -> tool0
+in metres, joint vectors are URDF joint values in radians (metres for prismatic joints). Two
+optional keyword parameters are honoured when the callable declares them: ``q_seed`` (the sampled
+joint vector is passed, so that a solver can pick free joints at a singularity from it) and
+``robot`` (the robot under test: a :class:`dhkin.robot.Robot`, or any
+:class:`~dhkin.arm.Arm`). :func:`adapt` wraps an IK that works in degrees or for another tool
+frame.
+
+Samples (fixed seed): ``uniform`` joint vectors within the limits; ``special`` vectors whose
+joints take the special angles 0, +-pi/2, pi (those inside the limits); ``near_singular``
+vectors with the wrist joint q5 in [0, 1e-6] (q5 = 0 exactly for a quarter of them).
+
+**Reference.** Targets are made by Pinocchio on a reference description of the same robot, and
+every returned solution is checked on that same description (joint vectors in chain order, see
+:class:`dhkin.reference.Reference`; the reference's tip frame is the table's tool0). A bug shared
+by the table's own model and the IK under test cannot hide behind another description:
+
+* ``"rounded"`` (default): the table's generated URDF with every number of its origin, axis and
+  limit attributes rounded to :data:`ROUNDED_DIGITS` significant digits (:func:`rounded_urdf`),
+  as vendors write them (UR's pi/2 is 1.570796327): about 1e-10 from the exact table;
+* a vendor URDF (a path) with its ``base`` and ``tip`` frames (defaults from
+  :data:`dhkin.vendors.VENDOR_REFERENCES` when the robot is listed there, else base_link /
+  tool0);
+* ``"exact"``: the generated URDF itself.
+
+Outcome per sample (one each, the first that applies, in this order):
+
+* ``wrong``: a returned solution is not exact on the reference (position or rotation error above
+  the tolerance plus the reference's measured deviation from the table's own model: a solution
+  exact on the table is off by that much on another description), not finite, of the wrong
+  length, or outside the joint limits (the solutions of the continuity call below included);
+* ``no_solution``: nothing came back (every target is reachable: it was made from q);
+* ``missing``: solutions came back but none is the sampled q up to in-limit 2pi shifts (joint
+  difference modulo 2pi <= ``joint_tolerance``). At the wrist singularity (|sin q5| <=
+  :data:`WRIST_SINGULAR` in the sampled q) the pose fixes only a one-parameter family; an IK that
+  takes ``q_seed`` gets the sampled q and must return it, while for an IK without ``q_seed`` only
+  the joints every such family keeps (joints 1 and 5) are compared. Near a singularity a pose
+  fixes q only to about (pose uncertainty) / sigma_min(J), so the joint tolerance there is
+  ``joint_tolerance + max(POSE_ROUNDING, reference deviation, residual) / sigma_min``
+  (sigma_min from Pinocchio's Jacobian at the sampled q; residual: the returned solutions'
+  largest error on the reference);
+* ``missing_branch``: a branch of the closed-form solution set is not among the solutions, on
+  any pose, whether or not the sampled q lies on it. The branches of a pose are dhkin's own
+  closed-form answer ``robot.ik(T, q_seed=q, copies=False)`` (one solution per branch; those
+  that verify on the reference); each must be matched by a returned solution like the sampled q
+  is above (mod 2pi, same widening at the branch's own sigma_min; on the wrist singularity, where
+  a branch is a family, joints 1 and 5 only). Checked for robots with a closed-form family and
+  IKs that promise every solution (``complete_expected``);
+* ``discontinuous``: on the singular sets (:data:`CONTINUITY_SETS`), an IK that takes ``q_seed``
+  is called a second time with the seed perturbed by :data:`SEED_PERTURBATION` rad (each
+  revolute joint +- at random, fixed seed, clipped to the limits); the returned solution nearest
+  the perturbed seed must lie within :data:`CONTINUITY_DISTANCE` rad of it on every joint (mod
+  2pi). At q5 = 0 the free joint must follow the seed, not jump;
+* ``success``: none of the above.
+
+``wrong``, ``no_solution`` and ``discontinuous`` always fail a run; ``missing`` and
+``missing_branch`` fail it when the IK promises every solution.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from collections import Counter
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dhkin.arm import Arm
+from dhkin.errors import DhkinError, FamilyError, InputError
+from dhkin.transforms import pose_error
+from dhkin.validate.adapters import IKCallable, _call, _takes_seed, own_ik
+from dhkin.validate.references import ReferenceSpec, TargetModel, target_model
+from dhkin.validate.report import OUTCOMES, SampleResult, ValidationReport
+from dhkin.validate.samples import (
+    CONTINUITY_DISTANCE,
+    CONTINUITY_SETS,
+    SEED_PERTURBATION,
+    WRIST_JOINT,
+    perturbed_seeds,
+    sample_joint_vectors,
+)
+
+#: |sin q5| at or below which a sample is on the wrist singularity for the missing check.
+WRIST_SINGULAR = 1e-6
+
+
+#: Pose rounding (m and rad) of a target computed in floating point, a few ulps of a 1 m arm:
+#: the joint difference a pose cannot resolve is about POSE_ROUNDING / sigma_min(J).
+POSE_ROUNDING = 1e-14
+
+
+#: Joints (0-based) compared at the wrist singularity for an IK that takes no seed.
+SINGULAR_FAMILY_FIXED_JOINTS = (0, 4)
+
+
+def _wrap(robot: Arm, difference: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Joint differences with revolute joints wrapped to (-pi, pi] (prismatic ones as they are)."""
+    revolute = np.array([j.is_revolute for j in robot.table.joints])
+    return np.where(revolute, np.pi - np.mod(np.pi - difference, 2.0 * np.pi), difference)
+
+
+def _configuration_labels(robot: Arm, targets: NDArray[np.float64],
+                          q: NDArray[np.float64]) -> list[str]:
+    """Configuration of each sampled q according to dhkin's closed-form solver ('' if none)."""
+    try:
+        batch = robot.ik_batch_detailed(targets)
+    except FamilyError:
+        return [""] * q.shape[0]
+    labels = []
+    for k in range(q.shape[0]):
+        candidates = batch.q[k][batch.valid[k]]
+        branches = batch.branch[k][batch.valid[k]]
+        if candidates.shape[0] == 0:
+            labels.append("unlabelled")
+            continue
+        difference = _wrap(robot, candidates - q[k])
+        best = int(np.argmin(np.abs(difference).max(axis=1)))
+        label = batch.branch_labels[branches[best]]
+        labels.append(" ".join(f"{key}={value}" for key, value in label.items()))
+    return labels
+
+
+def _wrist_singular(robot: Arm, q: NDArray[np.float64]) -> bool:
+    return (robot.dof > WRIST_JOINT and robot.table.joints[WRIST_JOINT].is_revolute
+            and abs(np.sin(q[WRIST_JOINT])) <= WRIST_SINGULAR)
+
+
+def _compared_joints(robot: Arm, q_sampled: NDArray[np.float64],
+                     seeded: bool) -> NDArray[np.int64]:
+    """Joints the missing check compares (all, except at the wrist singularity without seed)."""
+    if _wrist_singular(robot, q_sampled) and not seeded:
+        return np.array(SINGULAR_FAMILY_FIXED_JOINTS)
+    return np.arange(robot.dof)
+
+
+@dataclass(frozen=True)
+class _Checked:
+    """Outcome of one sample before it is turned into a (JSON-ready) SampleResult."""
+
+    outcome: str
+    detail: str
+    position: NDArray[np.float64]
+    rotation: NDArray[np.float64]
+
+
+def _resolvable(robot: Arm, q: NDArray[np.float64], joint_tolerance: float,
+                noise: float = POSE_ROUNDING) -> float:
+    """Joint distance under which two solutions of one pose count as the same at q:
+    joint_tolerance + noise / sigma_min of Pinocchio's Jacobian (6 x n) at q, with ``noise``
+    the pose's uncertainty: its rounding, or the reference's deviation from the table's model
+    (a vendor description's target is a pose of the vendor's model, not exactly of ours)."""
+    sigma = np.linalg.svd(robot.reference().jacobian(q), compute_uv=False)
+    return joint_tolerance + noise / max(float(sigma.min()), 1e-300)
+
+
+def _matched(robot: Arm, model: TargetModel, Q: NDArray[np.float64], q: NDArray[np.float64],
+             joints: NDArray[np.int64], joint_tolerance: float,
+             residual: float = 0.0) -> tuple[bool, float]:
+    """Whether some row of Q is q (mod 2pi on ``joints``, widened by :func:`_resolvable` with
+    the pose's uncertainty: the reference's deviation, or the residual of the solutions (two
+    joint vectors within r of one pose can differ by ~r / sigma_min))."""
+    closest = float(np.abs(_wrap(robot, Q - q)[:, joints]).max(axis=1).min())
+    noise = max(POSE_ROUNDING, model.deviation, residual)
+    found = closest <= joint_tolerance or closest <= _resolvable(robot, q, joint_tolerance, noise)
+    return found, closest
+
+
+def _verify(robot: Arm, model: TargetModel, T: NDArray[np.float64],
+            returned: list[NDArray[np.float64]], tolerance: float
+            ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], str]:
+    """Finite solutions, their residuals on the reference, and what is wrong with them ('')."""
+    dof = robot.dof
+    good = [s for s in returned if s.shape == (dof,) and np.all(np.isfinite(s))]
+    Q = np.array(good, dtype=float).reshape(len(good), dof)
+    position: NDArray[np.float64] = np.zeros(0)
+    rotation: NDArray[np.float64] = np.zeros(0)
+    if len(Q):
+        position, rotation = pose_error(model.fk(Q), np.broadcast_to(T, (len(Q), 4, 4)))
+    if len(Q) < len(returned):
+        return Q, position, rotation, (f"{len(returned) - len(Q)} solution(s) not finite or "
+                                       f"not {dof} values")
+    if len(Q) and not np.all(robot.table.in_limits(Q)):
+        return Q, position, rotation, "a solution lies outside the joint limits"
+    allowed = tolerance + model.deviation
+    if len(Q) and (position.max() > allowed or rotation.max() > allowed):
+        return Q, position, rotation, (f"residual {position.max():.2e} m / "
+                                       f"{rotation.max():.2e} rad (allowed {allowed:.2e}: the "
+                                       f"tolerance + the reference's deviation from the table)")
+    return Q, position, rotation, ""
+
+
+def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64],
+                  T: NDArray[np.float64], returned: list[NDArray[np.float64]], tolerance: float,
+                  joint_tolerance: float, seeded: bool) -> tuple[_Checked, NDArray[np.float64]]:
+    """wrong / no_solution / missing / success of the first call, and its finite solutions."""
+    Q, position, rotation, problem = _verify(robot, model, T, returned, tolerance)
+    if problem:
+        return _Checked("wrong", problem, position, rotation), Q
+    if not returned:
+        return _Checked("no_solution", "nothing returned for a reachable target", position,
+                        rotation), Q
+    residual = float(max(position.max(), rotation.max())) if len(Q) else 0.0
+    found, closest = _matched(robot, model, Q, q_sampled,
+                              _compared_joints(robot, q_sampled, seeded), joint_tolerance,
+                              residual)
+    if not found:
+        return _Checked("missing", f"closest returned solution differs by {closest:.2e} "
+                                   "(mod 2pi)", position, rotation), Q
+    return _Checked("success", "", position, rotation), Q
+
+
+def _missing_branches(robot: Arm, model: TargetModel, T: NDArray[np.float64],
+                      q_sampled: NDArray[np.float64], Q: NDArray[np.float64], tolerance: float,
+                      joint_tolerance: float) -> list[tuple[str, float]]:
+    """(configuration, closest distance) of each closed-form branch of T that Q lacks.
+
+    The branches are ``robot.ik(T, q_seed=q_sampled, copies=False)``, those that verify on the
+    reference. A branch on the wrist singularity is a one-parameter family: only joints 1 and 5
+    are compared there.
+    """
+    try:
+        branches = robot.ik(T, q_seed=q_sampled, copies=False)
+    except DhkinError:
+        return []
+    if not len(branches):
+        return []
+    position, rotation = pose_error(model.fk(branches.q),
+                                    np.broadcast_to(T, (len(branches), 4, 4)))
+    missing = []
+    allowed = tolerance + model.deviation
+    for k in np.flatnonzero((position <= allowed) & (rotation <= allowed)):
+        branch = branches.q[k]
+        joints = (np.array(SINGULAR_FAMILY_FIXED_JOINTS) if _wrist_singular(robot, branch)
+                  else np.arange(robot.dof))
+        found, closest = _matched(robot, model, Q, branch, joints, joint_tolerance)
+        if not found:
+            name = (str(branches.configurations[k]) if k < len(branches.configurations)
+                    else f"branch {k}")
+            missing.append((name, closest))
+    return missing
+
+
+def _nearest_to_seed(robot: Arm, Q: NDArray[np.float64],
+                     seed: NDArray[np.float64]) -> tuple[float, int]:
+    """Largest joint distance (mod 2pi) of the solution nearest ``seed``, and its joint."""
+    distance = np.abs(_wrap(robot, Q - seed))
+    best = int(np.argmin(distance.max(axis=1)))
+    joint = int(np.argmax(distance[best]))
+    return float(distance[best, joint]), joint
+
+
+def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> Iterable[Any]:
+    if not show:
+        return iterable
+    from tqdm import tqdm
+
+    return tqdm(iterable, total=total, desc=label, unit="pose", leave=False, file=sys.stderr)
+
+
+def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: int = 0,
+             tolerance: float = 1e-9, joint_tolerance: float = 1e-6,
+             progress: bool = False, ik_name: str | None = None,
+             complete_expected: bool | None = None,
+             reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
+             tip: str | None = None) -> ValidationReport:
+    """Validate ``ik`` (default: dhkin's own) on ``robot``; see the module docstring.
+
+    ``complete_expected`` (default: True, except for dhkin's own numerical IK, which returns
+    one solution per call) says whether missing samples and branches fail the run.
+    ``reference`` makes the targets and checks the solutions: "rounded" (default), "exact", or
+    the path of a vendor URDF whose frames ``base`` -> ``tip`` are the table's base_link ->
+    tool0 (defaults: :data:`~dhkin.vendors.VENDOR_REFERENCES`, else base_link / tool0).
+    """
+    if n < 1:
+        raise InputError(f"n: expected at least 1 sample, got {n}", field="n")
+    model = target_model(robot, reference, base, tip)
+    callable_ik = own_ik(robot) if ik is None else ik
+    if complete_expected is None:
+        complete_expected = ik is not None or robot.has_closed_form
+    q, sets = sample_joint_vectors(robot, n, seed)
+    return _run(robot, model, callable_ik, q, sets, perturbed_seeds(robot, q, sets, seed), seed,
+                tolerance, joint_tolerance, progress,
+                ik_name or str(getattr(callable_ik, "__name__", "ik")), complete_expected)
+
+
+def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
+         sets: list[str], perturbed: NDArray[np.float64], seed: int, tolerance: float,
+         joint_tolerance: float, progress: bool, ik_name: str,
+         complete_expected: bool = True) -> ValidationReport:
+    started = time.perf_counter()
+    targets = model.fk(q)
+    labels = _configuration_labels(robot, targets, q)
+    report = ValidationReport(robot=robot.name, ik_name=ik_name, tolerance=tolerance,
+                              joint_tolerance=joint_tolerance, seed=seed,
+                              complete_expected=complete_expected,
+                              reference=model.spec.to_json(), samples=len(sets))
+    if model.spec.kind != "exact":
+        position, rotation = pose_error(targets, robot.reference().fk(q))
+        report.reference_deviation = {"position_max": float(position.max()),
+                                      "rotation_max": float(rotation.max())}
+        model.deviation = max(report.reference_deviation.values())
+    counts: Counter[str] = Counter()
+    by_set: dict[str, Counter[str]] = {}
+    by_configuration: dict[str, Counter[str]] = {}
+    all_position, all_rotation, n_solutions = [], [], []
+    seeded = _takes_seed(ik)
+    check_branches = complete_expected and robot.has_closed_form
+    for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", progress):
+        try:
+            returned = _call(ik, robot, targets[k], q[k])
+        except DhkinError as exc:
+            returned, error = [], f"raised {type(exc).__name__}: {exc}"
+        else:
+            error = ""
+        checked, Q = _check_sample(robot, model, q[k], targets[k], returned, tolerance,
+                                   joint_tolerance, seeded)
+        outcome, detail = checked.outcome, error or checked.detail
+        all_position.append(checked.position)
+        all_rotation.append(checked.rotation)
+        missing: list[str] = []
+        if outcome == "success" and check_branches:
+            report.branch_checked += 1
+            lacking = _missing_branches(robot, model, targets[k], q[k], Q, tolerance,
+                                        joint_tolerance)
+            if lacking:
+                missing = [name for name, _ in lacking]
+                outcome = "missing_branch"
+                detail = f"{len(lacking)} branch(es) not returned: " + "; ".join(
+                    f"{name} (closest solution differs by {closest:.2e})"
+                    for name, closest in lacking)
+        returned_perturbed: list[NDArray[np.float64]] = []
+        if outcome == "success" and seeded and np.all(np.isfinite(perturbed[k])):
+            report.continuity_checked += 1
+            outcome, detail, returned_perturbed = _check_continuity(
+                robot, model, ik, targets[k], perturbed[k], tolerance, all_position,
+                all_rotation)
+        counts[outcome] += 1
+        by_set.setdefault(sets[k], Counter())[outcome] += 1
+        if labels[k]:
+            by_configuration.setdefault(labels[k], Counter())[outcome] += 1
+        n_solutions.append(len(returned))
+        if outcome != "success":
+            report.failures.append(SampleResult(
+                index=k, sample_set=sets[k], q_sampled=q[k].tolist(), target=targets[k].tolist(),
+                returned=[r.tolist() for r in returned],
+                position_errors=checked.position.tolist(),
+                rotation_errors=checked.rotation.tolist(), outcome=outcome, detail=detail,
+                configuration=labels[k],
+                perturbed_seed=(perturbed[k].tolist() if np.all(np.isfinite(perturbed[k]))
+                                else []),
+                returned_perturbed=[r.tolist() for r in returned_perturbed],
+                missing_branches=missing))
+    report.counts = {o: counts.get(o, 0) for o in OUTCOMES}
+    report.by_set = {s: dict(c) for s, c in by_set.items()}
+    report.by_configuration = {s: dict(c) for s, c in sorted(by_configuration.items())}
+    report.solution_counts = {"min": float(min(n_solutions)), "max": float(max(n_solutions)),
+                              "median": float(np.median(n_solutions))}
+    position, rotation = np.concatenate(all_position), np.concatenate(all_rotation)
+    if position.size:
+        report.residuals = {
+            "position_max": float(position.max()), "position_median": float(np.median(position)),
+            "rotation_max": float(rotation.max()), "rotation_median": float(np.median(rotation)),
+        }
+    report.seconds = time.perf_counter() - started
+    return report
+
+
+def _check_continuity(robot: Arm, model: TargetModel, ik: IKCallable, T: NDArray[np.float64],
+                      seed: NDArray[np.float64], tolerance: float,
+                      all_position: list[NDArray[np.float64]],
+                      all_rotation: list[NDArray[np.float64]]
+                      ) -> tuple[str, str, list[NDArray[np.float64]]]:
+    """Second call with the perturbed seed: (outcome, detail, what came back)."""
+    try:
+        returned = _call(ik, robot, T, seed)
+    except DhkinError as exc:
+        return ("discontinuous", f"with the perturbed seed: raised {type(exc).__name__}: {exc}",
+                [])
+    Q, position, rotation, problem = _verify(robot, model, T, returned, tolerance)
+    all_position.append(position)
+    all_rotation.append(rotation)
+    if problem:
+        return "wrong", f"with the perturbed seed: {problem}", returned
+    if not len(Q):
+        return "discontinuous", "nothing returned for the perturbed seed", returned
+    distance, joint = _nearest_to_seed(robot, Q, seed)
+    if distance > CONTINUITY_DISTANCE:
+        return ("discontinuous", f"with the seed perturbed by +-{SEED_PERTURBATION} rad the "
+                f"nearest solution is {distance:.3f} from it on joint {joint + 1} (allowed "
+                f"{CONTINUITY_DISTANCE})", returned)
+    return "success", "", returned
+
+
+def replay(robot: Arm, ik: IKCallable, path: str | Path, ik_name: str | None = None,
+           reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
+           tip: str | None = None, complete_expected: bool | None = None) -> ValidationReport:
+    """Rerun the samples of a failure file with ``ik`` and check them again, on the reference
+    the file records (files without one: "exact") unless ``reference`` / ``base`` / ``tip``
+    say otherwise, with the recorded perturbed seeds."""
+    file = Path(path)
+    try:
+        data: Mapping[str, Any] = json.loads(file.read_text(encoding="utf-8"))
+        failures = data["failures"]
+        q = np.array([f["q_sampled"] for f in failures], dtype=float).reshape(-1, robot.dof)
+        sets = [str(f["sample_set"]) for f in failures]
+        tolerance = float(data["tolerance"])
+        joint_tolerance = float(data["joint_tolerance"])
+        recorded = [np.asarray(f.get("perturbed_seed") or [], dtype=float) for f in failures]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"{file}: not a dhkin failure file ({exc}); expected the JSON "
+                         "written by `dhkin validate --failures`") from exc
+    if data.get("robot") != robot.name:
+        raise InputError(f"{file}: failures of robot {data.get('robot')!r}, "
+                         f"expected {robot.name!r}")
+    if not failures:
+        raise InputError(f"{file}: no failures to replay")
+    if reference is None:
+        reference = ReferenceSpec.from_json(data.get("reference", "exact"), f"{file}: reference")
+    model = target_model(robot, reference, base, tip)
+    seed = int(data.get("seed", 0))
+    perturbed = perturbed_seeds(robot, q, sets, seed)
+    for k, row in enumerate(recorded):
+        if row.shape == (robot.dof,) and sets[k] in CONTINUITY_SETS:
+            perturbed[k] = row
+    if complete_expected is None:
+        complete_expected = bool(data.get("complete_expected", True))
+    return _run(robot, model, ik, q, sets, perturbed, seed, tolerance, joint_tolerance, False,
+                ik_name or str(getattr(ik, "__name__", "ik")), complete_expected)

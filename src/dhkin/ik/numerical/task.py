@@ -1,0 +1,146 @@
+"""Numerical IK: one task (target, mode, weights), the Pinocchio chain it is solved on, and the
+banks of start configurations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from dhkin.ik.numerical.settings import _WARM_START_ROTATION_WEIGHT, Mode
+from dhkin.reference import Reference
+
+
+@dataclass
+class _Task:
+    """One prepared target: what the descent evaluates, in the model's world frame."""
+
+    mode: Mode
+    rows: int                                   # task rows: 6 pose, 3 position, 2 planar
+    world_target: pin.SE3                       # pose: world -> target frame
+    target_inverse: pin.SE3                     # pose: its inverse
+    world_point: NDArray[np.float64]            # position: target point in the world
+    base_rotation_t: NDArray[np.float64] | None  # position: world -> base axes (None: same)
+    tcp: pin.SE3 | None                         # tip -> TCP (None: the tip itself)
+    preferred: NDArray[np.float64] | None = None  # null-space target, when redundant
+    weights: NDArray[np.float64] | None = None    # null-space weights per joint
+
+
+@dataclass
+class _Chain:
+    """Pinocchio model of the chain, with the fast mapping chain q -> configuration."""
+
+    model: pin.Model
+    data: pin.Data
+    tip_id: int
+    world_from_base: pin.SE3
+    dof: int
+    direct: bool
+    neutral: NDArray[np.float64]
+    index_q: NDArray[np.intp]                 # nq = 1 joints: config index, chain position
+    chain_q: NDArray[np.intp]
+    index_cos: NDArray[np.intp]               # continuous joints: cos/sin slots, chain position
+    chain_continuous: NDArray[np.intp]
+    index_v: NDArray[np.intp]
+    velocity_direct: bool
+
+    @classmethod
+    def of(cls, reference: Reference) -> _Chain:
+        model = reference.model
+        data = model.createData()
+        joints = [model.joints[j] for j in reference.chain]
+        continuous = [jm.nq == 2 for jm in joints]
+        neutral = pin.neutral(model)
+        world_from_base = pin.SE3.Identity()
+        if reference.base is not None:
+            pin.framesForwardKinematics(model, data, neutral)
+            world_from_base = pin.SE3(data.oMf[reference.frame_id(reference.base)])
+        index_v = np.array([jm.idx_v for jm in joints], dtype=np.intp)
+        dof = len(joints)
+        plain = [k for k, c in enumerate(continuous) if not c]
+        turning = [k for k, c in enumerate(continuous) if c]
+        return cls(
+            model=model, data=data, tip_id=reference.frame_id(reference.tip),
+            world_from_base=world_from_base, dof=dof,
+            direct=(model.nq == dof and not turning
+                    and [jm.idx_q for jm in joints] == list(range(dof))),
+            neutral=neutral,
+            index_q=np.array([joints[k].idx_q for k in plain], dtype=np.intp),
+            chain_q=np.array(plain, dtype=np.intp),
+            index_cos=np.array([joints[k].idx_q for k in turning], dtype=np.intp),
+            chain_continuous=np.array(turning, dtype=np.intp),
+            velocity_direct=(model.nv == dof and index_v.tolist() == list(range(dof))),
+            index_v=index_v,
+        )
+
+    def configuration(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Chain q (dof,) -> Pinocchio configuration (nq,), joints off the chain at neutral."""
+        if self.direct:
+            return q
+        config = self.neutral.copy()
+        config[self.index_q] = q[self.chain_q]
+        if self.index_cos.size:
+            angles = q[self.chain_continuous]
+            config[self.index_cos] = np.cos(angles)
+            config[self.index_cos + 1] = np.sin(angles)
+        return config
+
+    def update(self, q: NDArray[np.float64]) -> pin.SE3:
+        """Kinematics and joint Jacobians at q; returns the tip placement (a live reference)."""
+        pin.computeJointJacobians(self.model, self.data, self.configuration(q))
+        pin.updateFramePlacement(self.model, self.data, self.tip_id)
+        return self.data.oMf[self.tip_id]
+
+    def tip_jacobian(self, frame: pin.ReferenceFrame) -> NDArray[np.float64]:
+        """6 x dof Jacobian of the tip after :meth:`update`, chain-order columns."""
+        J = pin.getFrameJacobian(self.model, self.data, self.tip_id, frame)
+        return J if self.velocity_direct else J[:, self.index_v]
+
+    def tip_placement(self, q: NDArray[np.float64]) -> pin.SE3:
+        """World -> tip at q (a copy)."""
+        pin.forwardKinematics(self.model, self.data, self.configuration(q))
+        return pin.SE3(pin.updateFramePlacement(self.model, self.data, self.tip_id))
+
+
+class _StartBank:
+    """Random starts of one int seed, drawn once and kept (grows on demand)."""
+
+    def __init__(self, generator: np.random.Generator, low: NDArray[np.float64],
+                 high: NDArray[np.float64]) -> None:
+        self._generator, self._low, self._high = generator, low, high
+        self.starts: list[NDArray[np.float64]] = []
+        self.grow(16)
+
+    def grow(self, count: int) -> None:
+        draws = self._generator.uniform(self._low, self._high, size=(count, self._low.size))
+        self.starts.extend(draws)
+
+
+class _WarmStarts:
+    """A fixed table of configurations with their tip poses (world frame), to pick a start
+    near a target: distance |p - p_target|^2 + L^2 (3 - trace(R^T R_target)), where
+    3 - trace = 2 (1 - cos angle) ~ angle^2 and L = 0.3 x the largest tip distance seen."""
+
+    def __init__(self, q: NDArray[np.float64], positions: NDArray[np.float64],
+                 rotations: NDArray[np.float64]) -> None:
+        self.q, self.positions = q, positions
+        self.rotations = rotations.reshape(len(q), 9)
+        reach = float(np.sqrt((positions * positions).sum(axis=1)).max())
+        self.weight = (_WARM_START_ROTATION_WEIGHT * reach) ** 2
+
+    def nearest(self, task: _Task) -> NDArray[np.float64]:
+        if task.mode == "pose":
+            target = task.world_target
+            offset = self.positions - target.translation
+            distance = (offset * offset).sum(axis=1)
+            distance += self.weight * (3.0 - self.rotations @ target.rotation.reshape(9))
+        else:
+            offset = self.positions - task.world_point
+            if task.base_rotation_t is not None:
+                offset = offset @ task.base_rotation_t.T
+            offset = offset[:, :task.rows]
+            distance = (offset * offset).sum(axis=1)
+        return self.q[int(np.argmin(distance))]

@@ -246,9 +246,9 @@ def test_every_builtin_table_is_valid(name: str) -> None:
 def test_joint_values_are_checked_by_fk() -> None:
     """FK refuses a q of the wrong length or with NaN, naming q and the expected shape."""
     table = dhkin.load("ur5").table
-    with pytest.raises(dhkin.DHError, match=r"q: expected shape \(6,\) or \(N, 6\), got \(5,\)"):
+    with pytest.raises(dhkin.InputError, match=r"q: expected shape \(6,\) or \(N, 6\), got \(5,\)"):
         table.fk(np.zeros(5))
-    with pytest.raises(dhkin.DHError, match="q: expected finite joint values"):
+    with pytest.raises(dhkin.InputError, match="q: expected finite joint values"):
         table.fk(np.array([0, 0, np.nan, 0, 0, 0]))
 
 

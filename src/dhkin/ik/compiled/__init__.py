@@ -5,8 +5,11 @@ Modules (each one job): :mod:`.jit` (compile options), :mod:`.layout` (named off
 constant vectors passed to kernels), :mod:`.elementary` (sin, cos, atan2), :mod:`.chain` (FK,
 Jacobian and damped Newton refinement on the exact chain), :mod:`.pose` (input poses: checks and
 projection onto a rotation), :mod:`.spherical` and :mod:`.offset` (the family solvers),
-:mod:`.copies` (wrap and 2pi copies), :mod:`.pipeline` (one pose, start to end; batches are that
-function in a loop).
+:mod:`.copies` (wrap and 2pi copies), :mod:`.continuation` (beyond Newton: continuation from the
+ideal model, searches off a fold), :mod:`.pipeline` (one pose, start to end; batches are that
+function in a loop) and its steps: :mod:`.plan` (the solver's constants), :mod:`.settle` (one
+candidate refined and verified), :mod:`.members` (singular families), :mod:`.roots` (a refined
+table's extra roots), :mod:`.expand` (2pi copies of the answers).
 
 Cache guard: numba's on-disk cache (``cache=True``) checks only the source file of the function
 it compiled, so a kernel calling a helper from another module of this package would keep a stale

@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import dhkin
-from dhkin.ik.solver import default_workers
+from dhkin.ik.workers import default_workers
 from dhkin.transforms import invert, pose_error
 
 EXACT = 1e-9

@@ -20,10 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from dhkin.dh import DHTable, load_table, table_to_yaml
+from dhkin.dh import DHTable
 from dhkin.fit import fit_corrections, largest_correction, read_chain, structural_relations
 from dhkin.reference import Reference
 from dhkin.robot import builtin_dir
+from dhkin.table_file import load_table, table_to_yaml
 from dhkin.transforms import pose_error
 from dhkin.vendors import VENDOR_REFERENCES
 

@@ -27,9 +27,10 @@ import yaml
 
 import dhkin
 from dhkin.compare import compare_with_urdf
-from dhkin.dh import DHTable, exact_rpy, load_table, parse_table, table_to_yaml, write_table
+from dhkin.dh import DHTable
 from dhkin.fit import fit_corrections, largest_correction, read_chain, structural_relations
 from dhkin.reference import Reference
+from dhkin.table_file import exact_rpy, load_table, parse_table, table_to_yaml, write_table
 from dhkin.transforms import invert, pose_error, rot_x, rot_y, rot_z, translation
 from dhkin.validators import load_in_pinocchio, load_in_yourdfpy, run_check_urdf
 from dhkin.vendors import VENDOR_REFERENCES

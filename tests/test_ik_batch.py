@@ -23,7 +23,7 @@ import dhkin
 from dhkin.errors import InputError
 from dhkin.ik.compiled import elementary
 from dhkin.ik.result import flag_names
-from dhkin.ik.solver import POSES_PER_WORKER
+from dhkin.ik.workers import POSES_PER_WORKER
 from dhkin.transforms import pose_error
 
 DATA = Path(__file__).resolve().parent / "data"

@@ -4,7 +4,7 @@
 (one class per fault, all exported here).
 """
 
-from dhkin.dh import DHTable, Joint, load_table, parse_table, table_to_yaml, write_table
+from dhkin.dh import DHTable, Joint
 from dhkin.errors import (
     DHError,
     DhkinError,
@@ -19,6 +19,7 @@ from dhkin.errors import (
 )
 from dhkin.fit import fit_corrections
 from dhkin.robot import Robot, builtin_names, load
+from dhkin.table_file import load_table, parse_table, table_to_yaml, write_table
 
 __all__ = [
     "DHError",

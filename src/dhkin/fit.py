@@ -42,9 +42,10 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.dh import DHTable, Joint, exact_rpy
+from dhkin.dh import DHTable, Joint
 from dhkin.errors import DHError, URDFError
 from dhkin.reference import Reference
+from dhkin.table_file import exact_rpy
 from dhkin.transforms import (
     invert,
     pose_error,

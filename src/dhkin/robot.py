@@ -11,11 +11,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.builtin import builtin_dir, builtin_names, resolve_table_path
-from dhkin.dh import DHTable, load_table
+from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
 from dhkin.ik.result import IKBatch, IKSolutions
 from dhkin.ik.solver import DEFAULT_CHUNK, DEFAULT_TOLERANCE, ClosedFormSolver
 from dhkin.reference import Reference
+from dhkin.table_file import load_table
 from dhkin.urdf import GeneratedFiles, generate
 
 if TYPE_CHECKING:

@@ -26,8 +26,9 @@ import numpy as np
 import xacro
 from numpy.typing import NDArray
 
-from dhkin.dh import DHTable, Joint, exact_rpy
+from dhkin.dh import DHTable, Joint
 from dhkin.errors import URDFError
+from dhkin.table_file import exact_rpy
 from dhkin.transforms import (
     invert,
     matrix_to_rpy,

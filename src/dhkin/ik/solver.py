@@ -15,12 +15,9 @@ the seed (nearest 0 without one); ``copies=True`` lists every in-limit copy.
 from __future__ import annotations
 
 import functools
-import math
-import os
 import threading
 from collections.abc import Callable, Iterator, Mapping
-from concurrent.futures import ThreadPoolExecutor
-from types import MappingProxyType, ModuleType
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -28,188 +25,27 @@ from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import InputError
-from dhkin.ik.family import BAND, FamilyFit
+from dhkin.ik.family import FamilyFit
+from dhkin.ik.inputs import TWO_PI, _check_chunk, as_targets, check_tolerance, pose_error_message
+from dhkin.ik.plan import _kernels, plan_array
 from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions, flag_names
-from dhkin.transforms import invert, rot_x, rot_z, translation
+from dhkin.ik.workers import _in_slices, check_workers
+from dhkin.transforms import invert
 
-TWO_PI = 2.0 * math.pi
 #: A returned solution reproduces the target to this position (m) and rotation (rad) error.
 DEFAULT_TOLERANCE = 1e-9
+
+
 #: Poses per kernel call of :meth:`ClosedFormSolver.solve_batch`.
 DEFAULT_CHUNK = 65536
-#: A batch is shared among worker threads (the kernels release the GIL) only when each gets at
-#: least this many poses: starting a slice costs ~30 us, the work of a few poses; each pose is
-#: solved alone, so the result does not depend on the number of workers.
-POSES_PER_WORKER = 512
-#: Slices per worker thread of a shared batch (see :func:`_in_slices`).
-SLICES_PER_WORKER = 4
+
+
 #: solve_chunks' default chunks hold at most this much output (bytes).
 STREAM_BYTES = 64 * 2**20
-#: On a refined table, roots near a reach boundary are computed as if the target were at least
-#: this fraction of the model deviation (m) inside it (dhkin.ik.compiled.spherical): enough to
-#: give each of two roots that the ideal model merges a start on its own side, small enough not
-#: to move starts near a sensitive boundary far from the exact roots (measured on the calibrated
-#: UR5e, 2000 vendor poses: 0.2 and 0.02 lose 2-3 poses, 2.0 loses 10, none loses 29).
-SPREAD_FRACTION = 0.2
+
+
 #: Singularity flag names of each bit mask.
 _FLAG_SETS: tuple[frozenset[str], ...] = tuple(flag_names(bits) for bits in range(8))
-
-
-def _kernels() -> ModuleType:
-    """dhkin.ik.compiled.pipeline, imported on first use (importing numba takes ~0.5 s)."""
-    from dhkin.ik.compiled import pipeline
-
-    return pipeline
-
-
-def chain_array(table: DHTable) -> NDArray[np.float64]:
-    """The exact chain of ``table`` (corrections included) as the compiled ``chain`` layout
-    (n + 1, ROW): per joint the constant frame before its motion, its kind, direction and offset;
-    the last row the frame after the last motion (see dhkin.ik.compiled.chain)."""
-    from dhkin.ik.compiled.chain import JOINT, ROW
-
-    n = table.dof
-    chain = np.zeros((n + 1, ROW))
-    after = np.eye(4)  # constant part since the previous joint's motion
-    for j, joint in enumerate(table.joints):
-        twist = rot_x(joint.alpha) @ translation(joint.a, 0, 0)
-        if table.convention == "standard":
-            before = after if joint.is_revolute else after @ rot_z(joint.theta)
-            rest = translation(joint.a, 0, 0) @ rot_x(joint.alpha)
-            after = (translation(0, 0, joint.d) @ rest if joint.is_revolute else rest)
-        else:
-            before = after @ twist if joint.is_revolute else after @ twist @ rot_z(joint.theta)
-            after = translation(0, 0, joint.d) if joint.is_revolute else np.eye(4)
-        after = after @ joint.correction_matrix
-        chain[j, JOINT.pre:JOINT.pre + 12] = before[:3].ravel()
-        chain[j, JOINT.revolute] = 1.0 if joint.is_revolute else 0.0
-        chain[j, JOINT.direction] = joint.direction
-        chain[j, JOINT.offset] = joint.offset
-    chain[n, :12] = after[:3].ravel()
-    return chain
-
-
-def plan_array(table: DHTable, fit: FamilyFit) -> NDArray[np.float64]:
-    """The ``plan`` of the compiled pipeline (layout PLAN, then geometry, chain and limits)."""
-    from dhkin.ik.compiled.bands import FLAG_BAND
-
-    kernels = _kernels()
-    PLAN = kernels.PLAN
-    geometry = fit.solved.geometry.copy()
-    chain = chain_array(table)
-    limits = np.stack([table.lower, table.upper], axis=1)
-    scale = fit.solved.scale
-    lever = max(1.0, scale)
-    position, rotation = fit.model_deviation
-    deviation = position + lever * rotation  # how far a point of the arm may move, m
-    geometry[_spread_index(fit.solved.kernel)] = SPREAD_FRACTION * deviation
-    head = np.zeros(PLAN.size)
-    head[PLAN.family] = fit.solved.kernel
-    head[PLAN.dof] = table.dof
-    head[PLAN.refine] = 1.0 if fit.refine else 0.0
-    # A refined table's exact singular set lies anywhere within the family band of the ideal
-    # model's (the band bounds the structural deviation): the seed band covers it
-    head[PLAN.seed_angle] = FLAG_BAND + (BAND.angle if fit.refine else 0.0)
-    head[PLAN.seed_length] = FLAG_BAND * scale + (BAND.length if fit.refine else 0.0)
-    head[PLAN.deviation] = 2.0 * deviation
-    head[PLAN.lever] = lever
-    head[PLAN.free_wrist], head[PLAN.free_elbow], head[PLAN.free_shoulder] = \
-        fit.solved.free_joints
-    ideal = chain_array(fit.ideal)
-    path = model_path(ideal, chain)
-    parts = [geometry, chain.ravel(), limits.ravel(), ideal.ravel(), path.ravel()]
-    offsets = np.cumsum([PLAN.size] + [part.size for part in parts])
-    head[PLAN.geometry_at] = offsets[0]
-    head[PLAN.geometry_size] = geometry.size
-    head[PLAN.chain_at], head[PLAN.limits_at] = offsets[1], offsets[2]
-    head[PLAN.ideal_at], head[PLAN.path_at] = offsets[3], offsets[4]
-    return np.ascontiguousarray(np.concatenate([head, *parts]))
-
-
-def model_path(ideal: NDArray[np.float64], exact: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(n + 1, 6): per constant frame of the chains, the rotation vector and translation of
-    P(ideal)^-1 P(exact) (the continuation path of dhkin.ik.compiled.chain.interpolate)."""
-    path = np.zeros((ideal.shape[0], 6))
-    for j in range(ideal.shape[0]):
-        P0, P1 = np.eye(4), np.eye(4)
-        P0[:3] = ideal[j, :12].reshape(3, 4)
-        P1[:3] = exact[j, :12].reshape(3, 4)
-        step = invert(P0) @ P1
-        R = step[:3, :3]
-        angle = float(np.arctan2(0.5 * np.linalg.norm([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0],
-                                                       R[1, 0] - R[0, 1]]),
-                                 0.5 * (np.trace(R) - 1.0)))
-        axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-        norm = float(np.linalg.norm(axis))
-        path[j, :3] = axis * (angle / norm) if norm > 0 else 0.0
-        path[j, 3:] = step[:3, 3]
-    return path
-
-
-def _spread_index(kernel: int) -> int:
-    """Where a family's geometry vector keeps ``spread``."""
-    from dhkin.ik.compiled import offset, spherical
-
-    return offset.GEOMETRY.spread if kernel == _kernels().OFFSET_WRIST \
-        else spherical.GEOMETRY.spread
-
-
-def check_tolerance(tolerance: Any) -> float:
-    """``tolerance`` as a float; InputError unless it is a positive finite number."""
-    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating,
-                                                                 np.integer)):
-        raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
-                         f"{tolerance!r}", field="tolerance")
-    value = float(tolerance)
-    if not (math.isfinite(value) and value > 0.0):
-        raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
-                         f"{tolerance!r}", field="tolerance")
-    return value
-
-
-def as_targets(T: ArrayLike) -> tuple[NDArray[np.float64], bool]:
-    """Poses (4, 4) or (N, 4, 4) as C-contiguous float64 (N, 4, 4) and whether one was given."""
-    try:
-        targets = np.ascontiguousarray(T, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"T: expected a (4, 4) pose or (N, 4, 4) poses of numbers ({exc})"
-                         , field="T") from exc
-    single = targets.ndim == 2
-    if single:
-        targets = targets[None]
-    if targets.ndim != 3 or targets.shape[1:] != (4, 4):
-        raise InputError(field="T", value=np.shape(T),
-                         expected="a (4, 4) pose or (N, 4, 4) poses")
-    return targets, single
-
-
-def pose_error_message(name: str, T: NDArray[np.float64], status: int) -> str:
-    """The error message for a pose the kernels rejected with ``status``."""
-    from dhkin.ik.compiled import pose
-
-    if status == pose.STATUS_NOT_FINITE:
-        return f"{name}: expected finite numbers, got NaN or inf"
-    if status == pose.STATUS_BOTTOM_ROW:
-        return (f"{name}: bottom row is {T[3].tolist()}, expected [0, 0, 0, 1] (within "
-                f"{pose.BOTTOM_ROW_TOLERANCE:g})")
-    R = T[:3, :3]
-    orthonormality = float(np.abs(R @ R.T - np.eye(3)).max())
-    return (f"{name}: rotation block is not a rotation (|R R^T - I| = {orthonormality:.2e}, "
-            f"det = {np.linalg.det(R):.3g}); expected |R R^T - I| <= "
-            f"{pose.ORTHONORMALITY_GATE:g} and det > 0 (a rotation rounded to a few digits)")
-
-
-def wrap_revolute(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Revolute joint values wrapped to (-pi, pi]; prismatic values unchanged."""
-    revolute = np.array([j.is_revolute for j in table.joints])
-    wrapped = np.pi - np.mod(np.pi - q, TWO_PI)
-    return np.where(revolute, wrapped, q)
-
-
-def turns_of(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.int64]:
-    """round(q / 2pi) for revolute joints, 0 for prismatic ones; shape of q."""
-    revolute = np.array([j.is_revolute for j in table.joints])
-    return np.where(revolute, np.round(q / TWO_PI), 0).astype(np.int64)
 
 
 class ClosedFormSolver:
@@ -549,57 +385,3 @@ class ClosedFormSolver:
             part = seeds if seeds.shape[0] == 1 else seeds[start:stop]
             yield start, self._batch(targets[start:stop], part, tolerance, frames, bool(copies),
                                      chunk_size, start)
-
-
-def default_workers() -> int:
-    """The CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
-
-
-def check_workers(workers: Any) -> int:
-    """``workers`` as a positive int (None: :func:`default_workers`); IKInputError otherwise."""
-    if workers is None:
-        return default_workers()
-    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
-        raise InputError(f"workers: expected a positive integer or None (the CPUs this "
-                         f"process may use), got {workers!r}", field="workers")
-    return int(workers)
-
-
-def _in_slices(n: int, workers: int, work: Callable[[int, int], None]) -> None:
-    """work(a, b) over contiguous slices of range(n), each of at least POSES_PER_WORKER poses,
-    SLICES_PER_WORKER per worker thread (poses near singularities or on refined tables take
-    longer: small slices keep the threads busy alike); one slice, in this thread, for a small n
-    or one worker."""
-    threads = max(1, min(workers, n // POSES_PER_WORKER))
-    if threads == 1:
-        work(0, n)
-        return
-    slices = max(threads, min(threads * SLICES_PER_WORKER, n // POSES_PER_WORKER))
-    bounds = [n * k // slices for k in range(slices + 1)]
-    futures = [_pool(threads).submit(work, bounds[k], bounds[k + 1]) for k in range(slices)]
-    for future in futures:
-        future.result()
-
-
-_POOL: dict[int, ThreadPoolExecutor] = {}
-_POOL_LOCK = threading.Lock()
-
-
-def _pool(size: int) -> ThreadPoolExecutor:
-    """A shared pool of ``size`` threads for batch slices (created on first use)."""
-    with _POOL_LOCK:
-        if size not in _POOL:
-            _POOL[size] = ThreadPoolExecutor(max_workers=size, thread_name_prefix="dhkin-ik")
-        return _POOL[size]
-
-
-def _check_chunk(chunk_size: Any) -> int:
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
-            or chunk_size < 1:
-        raise InputError(field="chunk_size", value=chunk_size, expected="a positive integer")
-    return int(chunk_size)
-

@@ -8,11 +8,11 @@ from pathlib import Path
 from numpy.typing import ArrayLike
 
 from dhkin.builtin import resolve_table_path
-from dhkin.dh import load_table
 from dhkin.errors import InputError
 from dhkin.ik.numerical.solver import NumericalIK, RobotLike
 from dhkin.ik.result import IKSolutions
 from dhkin.reference import Reference
+from dhkin.table_file import load_table
 
 
 def numerical_ik(robot_or_urdf: RobotLike | Reference | NumericalIK | str | Path, target: ArrayLike,

@@ -244,3 +244,14 @@ def test_calibration_several_times_larger_stays_exact_and_complete(factor: float
     fit = fit_family(scaled)
     assert fit.refine and fit.structural_deviation[0] > 0.8 * factor * 1.7e-3
     _solved_exactly_and_completely(scaled, 1000, int(factor))
+
+
+def test_every_family_labels_its_branches_with_the_same_words(load_robot) -> None:
+    """One vocabulary: the label words of every family's branches are LABEL_WORDS."""
+    from dhkin.ik.result import LABEL_WORDS
+
+    for name in ("abb_irb1200_7_70", "ur5", "aubo_i10", "stanford_arm", "anthropomorphic_arm"):
+        labels = load_robot(name).ik_solver.branch_labels
+        for branch in labels:
+            for key, word in branch.items():
+                assert word in LABEL_WORDS[key], (name, key, word)

@@ -443,7 +443,7 @@ def test_unreachable_targets_are_empty_with_how_close(solvers):
 
 
 def test_a_cut_short_descent_is_never_a_solution(solvers):
-    """One iteration per start cannot reach 1e-10 from a random start: nothing is returned."""
+    """One iteration per start cannot reach the tolerance from a random start: none returned."""
     ik = solvers["ur5"]
     _, T = random_targets(ik, 20, seed=51)
     for target in T:

@@ -160,9 +160,9 @@ def arm_state(robot: dhkin.Robot, geo: OracleGeometry) -> ArmState:
 def label_arrays(branch: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(left, elbow up, wrist up) of branch indices."""
     labels = [BRANCH_LABELS[b] for b in range(len(BRANCH_LABELS))]
-    left = np.array([lab["shoulder"] == "left" for lab in labels])
+    left = np.array([lab["shoulder"] == "lefty" for lab in labels])
     elbow = np.array([lab["elbow"] == "up" for lab in labels])
-    wrist = np.array([lab["wrist"] == "up" for lab in labels])
+    wrist = np.array([lab["wrist"] == "noflip" for lab in labels])
     return left[branch], elbow[branch], wrist[branch]
 
 
@@ -860,7 +860,7 @@ def test_ik_single_pose_carries_configurations_turns_and_residuals(load_robot):
     wrapped = wrap(q0)
     k = int(np.argmin(np.abs(sols.q - wrapped).max(1)))
     assert np.abs(sols.q[k] - wrapped).max() <= JOINT_TOL  # q6 = 200 deg as -160 deg
-    assert sols.configurations[k].labels == {"shoulder": "left", "elbow": "up", "wrist": "up"}
+    assert sols.configurations[k].labels == {"shoulder": "lefty", "elbow": "up", "wrist": "noflip"}
     seeded = robot.ik(T, q_seed=q0)  # the copy nearest the seed: q0 itself, q6 one turn up
     k = int(np.argmin(np.abs(seeded.q - q0).max(1)))
     assert np.abs(seeded.q[k] - q0).max() <= JOINT_TOL

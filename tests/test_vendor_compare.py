@@ -25,8 +25,9 @@ import pytest
 import yaml
 
 import dhkin
-from dhkin.compare import DEFAULT_COMPARE_TOLERANCE, compare_with_urdf
+from dhkin.compare import compare_with_urdf
 from dhkin.reference import Reference
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 from dhkin.vendors import VENDOR_REFERENCES
 
@@ -62,7 +63,7 @@ def test_builtin_table_matches_vendor_urdf(name: str, tip: str, robot_tip: str) 
     """compare_with_urdf over 10^4 random q (plus zero): deviations <= 1e-9 m and rad."""
     report = compare_with_urdf(dhkin.load(name), vendor_path(name), tip=tip, robot_tip=robot_tip,
                                n=N_SAMPLES, seed=1)
-    assert report.samples == N_SAMPLES and report.tolerance == DEFAULT_COMPARE_TOLERANCE == 1e-9
+    assert report.samples == N_SAMPLES and report.tolerance == DEFAULT_TOLERANCE == 1e-9
     assert report.max_position <= TOLERANCE, report.summary()
     assert report.max_rotation <= TOLERANCE, report.summary()
     assert report.ok and report.summary().startswith("OK: ")

@@ -13,6 +13,7 @@ import numpy as np
 
 from dhkin.errors import DhkinError, InputError
 from dhkin.robot import Robot, builtin_dir, builtin_names, load
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import matrix_to_rpy, xyz_rpy_to_matrix
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
@@ -307,7 +308,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--robot-tip", default="tool0", help="tip frame of our URDF")
     p.add_argument("-n", type=int, default=1000, help="joint vectors to sample (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--tolerance", type=float, default=1e-9, help="m and rad (default 1e-9)")
+    p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+                   help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
     p.set_defaults(run=cmd_compare)
 
     p = sub.add_parser("fk", help="forward kinematics base_link -> tool0 (or --frame)")
@@ -340,7 +342,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-n", type=int, default=10_000, help="uniform samples (default 10000), plus "
                                                          "n/10 special and n/10 near-singular")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--tolerance", type=float, default=1e-9, help="m and rad (default 1e-9)")
+    p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+                   help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
     p.add_argument("--deg", action="store_true", help="the IK returns degrees")
     p.add_argument("--ik-frame", help="the IK solves for this frame of our URDF, not tool0")
     p.add_argument("--json", help="write the report as JSON to this file")

@@ -17,12 +17,12 @@ from numpy.typing import NDArray
 from dhkin.arm import Arm
 from dhkin.errors import URDFError
 from dhkin.reference import Reference
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 
-#: Default pass threshold of `dhkin compare` (m and rad). The UR vendor files round pi/2 to
-#: 1.570796327 and carry 2e-11 m residues, so they sit ~6e-10 from the exact DH: 1e-9 is the
-#: tightest honest default.
-DEFAULT_COMPARE_TOLERANCE = 1e-9
+# Pass threshold of `dhkin compare`: dhkin's one DEFAULT_TOLERANCE (m and rad). The UR vendor
+# files round pi/2 to 1.570796327 and carry 2e-11 m residues, so they sit ~6e-10 from the exact
+# DH: 1e-9 is also the tightest honest threshold for them.
 
 
 @dataclass(frozen=True)
@@ -54,7 +54,7 @@ class CompareReport:
 
 def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base_link",
                       tip: str = "tool0", robot_tip: str = "tool0", n: int = 1000, seed: int = 0,
-                      tolerance: float = DEFAULT_COMPARE_TOLERANCE) -> CompareReport:
+                      tolerance: float = DEFAULT_TOLERANCE) -> CompareReport:
     """Compare ``robot`` (base_link -> robot_tip) with ``urdf_path`` (base_frame -> tip)."""
     path = Path(urdf_path)
     try:

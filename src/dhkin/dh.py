@@ -1,7 +1,7 @@
 """DH tables: the table and its joints, link transforms and batched forward kinematics (table
 files are read and written by :mod:`dhkin.table_file`).
 
-Conventions (see DESIGN.md, "The DH table file"):
+Conventions (the file format: README, "The DH table file"; :mod:`dhkin.table_file`):
 
 * ``standard`` (distal, Denavit-Hartenberg 1955 / Spong):
   ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``; joint i turns about z_{i-1}.

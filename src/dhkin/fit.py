@@ -2,9 +2,9 @@
 and tool such that the table's FK equals the description's for every q.
 
 A vendor URDF with rounded constants (pi/2 written as 1.570796) or a calibrated robot has no
-exact plain DH table, but it has an exact *corrected* one (DESIGN.md, "Corrections"): its nominal
-DH rows, each followed by a small constant transform C_i. :func:`fit_corrections` finds the
-smallest such C_i in closed form.
+exact plain DH table, but it has an exact *corrected* one (README, "The DH table file":
+``correction``): its nominal DH rows, each followed by a small constant transform C_i.
+:func:`fit_corrections` finds the smallest such C_i in closed form.
 
 The math. The URDF chain (read with Pinocchio at q = 0, in the frame ``base``) is
 ``T(q) = O_1 M_1(q_1) O_2 M_2(q_2) ... O_n M_n(q_n) O_tip``, with O_i the constant transform from
@@ -46,6 +46,7 @@ from dhkin.dh import DHTable, Joint
 from dhkin.errors import DHError, URDFError
 from dhkin.reference import Reference
 from dhkin.table_file import exact_rpy
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import (
     invert,
     pose_error,
@@ -60,7 +61,6 @@ from dhkin.transforms import (
 MAX_CORRECTION_TRANSLATION = 0.01  # m
 MAX_CORRECTION_ROTATION = 0.1  # rad
 #: The fitted table must reproduce the description to this (m and rad) on random joint values.
-FIT_TOLERANCE = 1e-9
 #: Components of fitted transforms below this (m or rad) are rounding noise and written as 0.
 NOISE = 1e-15
 _AXIS_TOLERANCE = 1e-9
@@ -233,7 +233,7 @@ def axis_lines(table: DHTable, q: ArrayLike | None = None
 
 
 def structural_relations(nominal: DHTable, exact: DHTable | URDFChain, samples: int = 20,
-                         seed: int = 0, tolerance: float = 1e-9) -> list[AxisRelation]:
+                         seed: int = 0, tolerance: float = DEFAULT_TOLERANCE) -> list[AxisRelation]:
     """Relations between joint axes that ``nominal`` (without its corrections) holds at every q
     (parallel, perpendicular, intersecting; checked at q = 0, at q = 90 deg on every revolute
     joint and at ``samples`` random q), with their deviation on ``exact`` (a corrected table or
@@ -377,6 +377,6 @@ def _verify(table: DHTable, chain: URDFChain) -> None:
     Q = np.vstack([np.zeros(table.dof), table.random_q(200, rng)])
     position, rotation = pose_error(table.fk(Q), chain.reference.fk(Q))
     worst = max(float(position.max()), float(rotation.max()))
-    if worst > FIT_TOLERANCE:  # a bug, not a user error: the construction is exact
+    if worst > DEFAULT_TOLERANCE:  # a bug, not a user error: the construction is exact
         raise DHError(f"{table.name}: the fitted table deviates from {chain.source} by "
-                      f"{worst:.3e} (m or rad); expected at most {FIT_TOLERANCE:.0e}")
+                      f"{worst:.3e} (m or rad); expected at most {DEFAULT_TOLERANCE:.0e}")

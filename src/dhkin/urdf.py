@@ -1,6 +1,6 @@
 """DH table -> ROS-Industrial style xacro (macro + top level) -> URDF through the xacro package.
 
-Frames of the generated description (DESIGN.md, "Frames and names"):
+Frames of the generated description (the names ROS users expect):
 
 * ``base_link``: the robot's root; ``base``: DH frame 0 (= base_link @ table.base), a fixed frame.
 * ``link_i`` (or the table's link name): the frame joint i moves. With the modified convention it

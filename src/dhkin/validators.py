@@ -15,7 +15,7 @@ from pathlib import Path
 
 from dhkin.errors import URDFError
 
-#: Frames every generated URDF has (DESIGN.md, "Frames and names").
+#: Frames every generated URDF has (see :mod:`dhkin.urdf`).
 REQUIRED_FRAMES = ("base_link", "base", "flange", "tool0")
 
 

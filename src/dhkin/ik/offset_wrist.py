@@ -24,17 +24,18 @@ Free joints (taken from the seed where that verifies): q6 at the wrist singulari
 wrist point on axis 1 (only without a lateral offset), q2 with axis 4 on axis 2 (equal upper arm
 and forearm).
 
-Branches (8): shoulder left/right x elbow up/down x wrist up/down, in that nesting order. Labels
-are geometric, with ``up`` the z axis of joint 1 and the *reach* the horizontal direction from
-axis 1 to the wrist point, past the lateral offset:
+Branches (8): shoulder lefty/righty x elbow up/down x wrist noflip/flip, in that nesting order
+(the words of every family: :data:`dhkin.ik.result.LABEL_WORDS`). Labels are geometric, with
+``up`` the z axis of joint 1 and the *reach* the horizontal direction from axis 1 to the wrist
+point, past the lateral offset:
 
-* shoulder ``left``: facing along the reach, the lateral offset (the link stack along ``n``) is on
-  the left; ``right``: on the right. With no lateral offset (c = 0): ``left`` = reach along
+* shoulder ``lefty``: facing along the reach, the lateral offset (the link stack along ``n``) is
+  on the left; ``righty``: on the right. With no lateral offset (c = 0): ``lefty`` = reach along
   ``n x up``.
 * elbow ``up``: the elbow (axis 3) lies above the line from axis 2 to axis 4, "above" meaning
   towards ``up`` when that line is turned to point along the reach.
-* wrist ``up``: sin(q5 - q5s) > 0, with q5s the singular value of q5 (axis 6 parallel to axis 4)
-  nearest to 0 (q5s = 0 on UR and AUBO tables).
+* wrist ``noflip``: sin(q5 - q5s) > 0 (``flip``: < 0), with q5s the singular value of q5 (axis 6
+  parallel to axis 4) nearest to 0 (q5s = 0 on UR and AUBO tables).
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ FAMILY = "offset_wrist"
 FREE_JOINTS = (5, 1, 0)
 BRANCH_LABELS: tuple[dict[str, str], ...] = tuple(
     {"shoulder": shoulder, "elbow": elbow, "wrist": wrist}
-    for shoulder in ("left", "right") for elbow in ("up", "down") for wrist in ("up", "down")
+    for shoulder in ("lefty", "righty") for elbow in ("up", "down") for wrist in ("noflip", "flip")
 )
 
 

@@ -17,6 +17,14 @@ from dhkin.errors import InputError
 #: Singularity flags, stored as bits so that batches keep them in one uint8 array.
 WRIST, ELBOW, SHOULDER = 1, 2, 4
 FLAG_NAMES: dict[int, str] = {WRIST: "wrist", ELBOW: "elbow", SHOULDER: "shoulder"}
+#: The words of configuration labels, the same in every family: per label, its two values.
+#: shoulder: which side of axis 1 the arm reaches to; elbow: the elbow above or below the line
+#: from the shoulder to the wrist; wrist: the sign of q5 relative to the shoulder side; slide
+#: (the Stanford arm's prismatic joint in place of an elbow): the two roots of the stroke. Each
+#: family's module says how its geometry decides them.
+LABEL_WORDS: dict[str, tuple[str, str]] = {"shoulder": ("lefty", "righty"), "elbow": ("up", "down"),
+                                           "wrist": ("noflip", "flip"),
+                                           "slide": ("forward", "backward")}
 
 
 def flag_names(bits: int) -> frozenset[str]:

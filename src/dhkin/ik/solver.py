@@ -30,11 +30,8 @@ from dhkin.ik.inputs import TWO_PI, _check_chunk, as_targets, check_tolerance, p
 from dhkin.ik.plan import _kernels, plan_array
 from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions, flag_names
 from dhkin.ik.workers import _in_slices, check_workers
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert
-
-#: A returned solution reproduces the target to this position (m) and rotation (rad) error.
-DEFAULT_TOLERANCE = 1e-9
-
 
 #: Poses per kernel call of :meth:`ClosedFormSolver.solve_batch`.
 DEFAULT_CHUNK = 65536

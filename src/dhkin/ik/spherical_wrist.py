@@ -1,10 +1,10 @@
 """The spherical-wrist family: 6R arms with an ortho-parallel R-R-R arm and a spherical wrist.
 
-The family covers the IRB 1200, the KUKA/FANUC/Puma class and the anthropomorphic arm of seed 003:
+The family covers the IRB 1200, the KUKA/FANUC/Puma class and the textbook anthropomorphic arm:
 axis 1 perpendicular to axis 2, axis 2 parallel to axis 3 (the arm), axes 4, 5, 6 meeting in one
 point, the wrist centre, with axis 4 perpendicular to 5 and 5 perpendicular to 6 (the wrist). The
 arm may have a shoulder offset a1 (axis 2 off axis 1), a lateral offset b (the wrist centre off the
-arm plane along axis 2, seed 003's d2), any upper arm, elbow offset (a3) and forearm (d4); any
+arm plane along axis 2), any upper arm, elbow offset (a3) and forearm (d4); any
 joint offsets and directions, standard or modified DH, any base and tool transform.
 
 This module reads the geometry of a table (its ideal model, see :mod:`dhkin.ik.family`) for the
@@ -29,18 +29,17 @@ at the wrist singularity (axes 4 and 6 parallel: only q4 +- q6 is fixed), q1 wit
 centre on axis 1 (b = 0), q2 with the wrist centre on axis 2 (equal upper arm and forearm,
 folded).
 
-Configuration labels (seed 000, section 2, generalised from its IRB 1200 table to any geometry):
+Configuration labels (ABB's IRB 1200 convention, generalised to any geometry; the words are
+:data:`dhkin.ik.result.LABEL_WORDS`):
 
-* shoulder: "lefty" when the wrist centre lies on the forward side of axis 1 (seed 000 2.1:
-  p'_x >= 0, the wrist centre's x in the frame turned by q1), "righty" when behind. "Forward" is
-  the side where the wrist centre is at q = 0 (the x axis of DH frame 1 when that is undecided).
-  Seed 000 section 3 contradicts 2.1 (it calls the forward q1 = atan2(e_y, e_x) "righty" when
-  q2 > 0); section 2 is the definition used here.
+* shoulder: "lefty" when the wrist centre lies on the forward side of axis 1 (its x in the frame
+  turned by q1 is >= 0), "righty" when behind. "Forward" is the side where the wrist centre is at
+  q = 0 (the x axis of DH frame 1 when that is undecided).
 * elbow: lefty: "up" when the elbow lies above the shoulder -> wrist-centre line (for the IRB 1200
-  that is q3 > -atan(d4/a3), seed 000 2.2); righty: the other way round. "Above" is towards
-  base_link +z along axis 1.
-* wrist: lefty: "noflip" when q5 > 0, "flip" when q5 < 0; righty: the other way round (seed 000
-  2.3). q5 is measured from the position where axes 4 and 6 are parallel in the same sense.
+  that is q3 > -atan(d4/a3)); righty: the other way round. "Above" is towards base_link +z along
+  axis 1.
+* wrist: lefty: "noflip" when q5 > 0, "flip" when q5 < 0; righty: the other way round. q5 is
+  measured from the position where axes 4 and 6 are parallel in the same sense.
 """
 
 from __future__ import annotations
@@ -169,7 +168,7 @@ def make_wrist(table: DHTable, axes: Sequence[JointAxis],
 
 def frame_one_x_point(table: DHTable, axes: Sequence[JointAxis]) -> Vector:
     """A point one metre along DH frame 1's x axis (q = 0) from axis 1: the last "forward"
-    reference, seed 000's x' axis for its table."""
+    reference."""
     link = table.link_transforms(np.zeros((1, table.dof)))[0][0]
     return axes[0].point + link[:3, 0]
 

@@ -1,4 +1,4 @@
-"""The Stanford family: an R-R-P arm and a spherical wrist (seed 003, 4-2-1).
+"""The Stanford family: an R-R-P arm and a spherical wrist (Spong's Stanford arm).
 
 Conditions: joints revolute, revolute, prismatic, then three revolute joints; axis 1
 perpendicular to axis 2; the slide direction of joint 3 perpendicular to axis 2; axes 4, 5, 6
@@ -18,7 +18,7 @@ Labels: shoulder lefty/righty and wrist noflip/flip as in the spherical-wrist fa
 forward/backward. Free joints: q4 at the wrist singularity, q1 with the wrist centre on axis 1,
 q2 with the wrist centre on axis 2.
 
-Seed 003 writes the wrist-centre equations of 4-2-1 as ``d3 s2 = dx c1 + dy s1``,
+A common textbook slip: the wrist-centre equations written as ``d3 s2 = dx c1 + dy s1``,
 ``-d3 c2 = dz - d1``, ``d2 = dy c1 - dx s1``; with Spong's frames the second is
 ``d3 c2 = dz - d1`` (the wrist centre z is d1 + d3 c2), so theta2 = atan2(dx c1 + dy s1, dz - d1),
 not atan2(..., d1 - dz). ``tests/test_ik_stanford.py`` checks this with Pinocchio.

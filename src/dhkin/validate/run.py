@@ -75,6 +75,7 @@ from numpy.typing import NDArray
 
 from dhkin.arm import Arm
 from dhkin.errors import DhkinError, FamilyError, InputError
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 from dhkin.validate.adapters import IKCallable, _call, _takes_seed, own_ik
 from dhkin.validate.references import ReferenceSpec, TargetModel, target_model
@@ -266,7 +267,7 @@ def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> It
 
 
 def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: int = 0,
-             tolerance: float = 1e-9, joint_tolerance: float = 1e-6,
+             tolerance: float = DEFAULT_TOLERANCE, joint_tolerance: float = 1e-6,
              progress: bool = False, ik_name: str | None = None,
              complete_expected: bool | None = None,
              reference: str | Path | ReferenceSpec | None = None, base: str | None = None,

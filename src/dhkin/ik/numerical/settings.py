@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dhkin.errors import InputError
 from dhkin.ik.result import IKSolutions
+from dhkin.tolerances import DEFAULT_TOLERANCE
 
 Mode: TypeAlias = Literal["pose", "position"]
 
@@ -36,8 +37,6 @@ TWO_PI = 2.0 * math.pi
 _PRISMATIC_NAME = re.compile(r"^JointModel(P[XYZ]|Prismatic)")
 
 
-#: Default convergence tolerance of a solution: position (m) and rotation (rad) residuals.
-DEFAULT_TOLERANCE = 1e-10
 
 
 #: Smallest damping added to J J^T: keeps the system solvable when J loses rank, and is far too

@@ -32,7 +32,7 @@ Steps (``method``), with ``J`` the task Jacobian and ``e`` the error:
   grows tenfold, an accepted one divides it by three. Far from a solution and near singularities
   this is damped least squares; close to a solution it is Newton-Raphson.
 * ``"dls"``: damped least squares with a fixed damping, ``lambda = damping^2``, every step taken.
-* ``"newton"``: the textbook iteration of seed 003 with the Moore-Penrose pseudo-inverse,
+* ``"newton"``: the textbook iteration with the Moore-Penrose pseudo-inverse,
   ``dq = -J^+ e``: Newton-Raphson for a square Jacobian, least squares for an under-actuated task
   (more task rows than joints), the minimum-norm step for a redundant arm. Every step taken.
 

@@ -108,8 +108,8 @@ def test_pendant_vector_is_recovered_among_the_solutions_of_its_pose(load_robot)
     k = int(np.argmin(np.abs(sols.q - PENDANT).max(1)))
     assert np.abs(sols.q[k] - PENDANT).max() <= 1e-9
     assert sols.flags[k] == frozenset()
-    assert dict(sols.configurations[k].labels) == {"shoulder": "right", "elbow": "up",
-                                                    "wrist": "up"}
+    assert dict(sols.configurations[k].labels) == {"shoulder": "righty", "elbow": "up",
+                                                    "wrist": "noflip"}
     assert sols.configurations[k].turns == (0,) * 6
     assert np.array_equal(sols.nearest(PENDANT), sols.q[k])
     assert np.array_equal(every.nearest(PENDANT), sols.q[k])

@@ -169,14 +169,16 @@ class DHTable:
                 A[:, i] = A[:, i] @ joint.correction_matrix
         return A
 
-    def fk_frames(self, q: ArrayLike) -> NDArray[np.float64]:
+    def fk_frames(self, q: ArrayLike, start: NDArray[np.float64] | None = None
+                  ) -> NDArray[np.float64]:
         """base_link -> DH frames 0..n, shape (N, n + 1, 4, 4) for q of shape (N, n).
 
-        Frame i is ``base @ A_1 C_1 ... A_i C_i``: it includes row i's correction."""
+        Frame i is ``base @ A_1 C_1 ... A_i C_i``: it includes row i's correction. With
+        ``start`` (4, 4) in place of ``base`` (the identity: DH frame 0 -> DH frame i)."""
         A = self.link_transforms(q)
         N = A.shape[0]
         frames = np.empty((N, self.dof + 1, 4, 4))
-        frames[:, 0] = self.base
+        frames[:, 0] = self.base if start is None else start
         for i in range(self.dof):
             frames[:, i + 1] = frames[:, i] @ A[:, i]
         return frames

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
 
@@ -30,16 +30,28 @@ class JointAxis:
     direction: Vector
 
 
-def zero_configuration(table: DHTable) -> tuple[list[JointAxis], NDArray[np.float64]]:
-    """Joint axes of ``table`` at q = 0 and M = DH frame 0 -> DH frame n at q = 0."""
-    links = table.link_transforms(np.zeros((1, table.dof)))[0]
-    frames = [np.eye(4)]
-    for link in links:
-        frames.append(frames[-1] @ link)
+def joint_axes(table: DHTable, q: ArrayLike, frame: Literal["base_link", "dh0"] = "base_link"
+               ) -> tuple[Vector, Vector]:
+    """Points o_k (N, n, 3) and unit directions z_k (N, n, 3) of the joint axes at q (N, n), in
+    base_link or in DH frame 0 (``frame="dh0"``): the one joint-axis function of dhkin.
+
+    Axis k is the z axis of DH frame k-1 (standard DH) or k (modified DH), oriented so that
+    increasing theta_k turns right-handed about it (multiply by ``direction`` for q_k).
+    """
+    frames = table.fk_frames(q, None if frame == "base_link" else np.eye(4))
     first = 0 if table.convention == "standard" else 1
-    axes = [JointAxis(point=frames[i + first][:3, 3].copy(),
-                      direction=frames[i + first][:3, 2].copy()) for i in range(table.dof)]
-    return axes, frames[-1]
+    chosen = frames[:, first:first + table.dof]
+    return chosen[..., :3, 3], chosen[..., :3, 2]
+
+
+def zero_configuration(table: DHTable) -> tuple[list[JointAxis], NDArray[np.float64]]:
+    """Joint axes of ``table`` at q = 0 in DH frame 0 (:func:`joint_axes`) and M = DH frame 0 ->
+    DH frame n at q = 0."""
+    zero = np.zeros((1, table.dof))
+    points, directions = joint_axes(table, zero, "dh0")
+    axes = [JointAxis(point=points[0, i].copy(), direction=directions[0, i].copy())
+            for i in range(table.dof)]
+    return axes, table.fk_frames(zero, np.eye(4))[0, -1]
 
 
 def table_scale(table: DHTable) -> float:

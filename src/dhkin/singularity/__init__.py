@@ -7,9 +7,9 @@ thresholds: :mod:`.thresholds`; the report of one configuration: :mod:`.report`;
 
 from __future__ import annotations
 
+from dhkin.ik.geometry import joint_axes
 from dhkin.singularity.factors import (
     Factors,
-    joint_axes,
 )
 from dhkin.singularity.model import (
     SingularityModel,

@@ -8,9 +8,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-from dhkin.dh import DHTable
 from dhkin.errors import InputError
 from dhkin.singularity.thresholds import KINDS, Array
 
@@ -73,18 +72,6 @@ class Factors:
 def _dot(a: Array, b: Array) -> Array:
     """Dot products along the last axis."""
     return np.sum(a * b, axis=-1)
-
-
-def joint_axes(table: DHTable, q: ArrayLike) -> tuple[Array, Array]:
-    """Points o_k (N, n, 3) and unit directions z_k (N, n, 3) of the joint axes in base_link.
-
-    Axis k is the z axis of DH frame k-1 (standard DH) or k (modified DH), oriented so that
-    increasing theta_k turns right-handed about it (multiply by ``direction`` for q_k).
-    """
-    frames = table.fk_frames(q)
-    first = 0 if table.convention == "standard" else 1
-    chosen = frames[:, first:first + table.dof]
-    return chosen[..., :3, 3], chosen[..., :3, 2]
 
 
 def _closest_point(p1: Array, z1: Array, p2: Array, z2: Array) -> Array:

@@ -91,8 +91,8 @@ from numpy.typing import ArrayLike
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError, InputError, UnreachableError
 from dhkin.ik.family import EXACT_RELATIVE, FamilyFit, fit_family
-from dhkin.ik.geometry import table_scale
-from dhkin.singularity.factors import Factors, _closest_point, _dot, joint_axes
+from dhkin.ik.geometry import joint_axes, table_scale
+from dhkin.singularity.factors import Factors, _closest_point, _dot
 from dhkin.singularity.thresholds import KINDS, MOVING_JOINT, Array
 
 if TYPE_CHECKING:

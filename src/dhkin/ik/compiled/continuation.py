@@ -10,7 +10,16 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from dhkin.ik.compiled.chain import _jacobian, _times_constant, check, fk_frames, refine, within
+from dhkin.ik.compiled.chain import (
+    GROWTH,
+    MAX_STEPS,
+    _jacobian,
+    _times_constant,
+    check,
+    fk_frames,
+    refine,
+    within,
+)
 from dhkin.ik.compiled.elementary import sincos
 from dhkin.ik.compiled.jit import jit
 
@@ -105,7 +114,8 @@ def refine_along(ideal: NDArray[np.float64], exact: NDArray[np.float64],
         if target < 1.0:
             interpolate(ideal, path, target, work)
         trial = start.copy()
-        position, rotation = refine(model, T, trial, fixed, tolerance)
+        position, rotation = refine(model, T, trial, fixed, tolerance, np.int64(4 * MAX_STEPS),
+                                    GROWTH, 0.0)
         if within(position, rotation, tolerance):
             t = target
             for j in range(n):
@@ -158,7 +168,7 @@ def off_fold(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.f
         for sign in (1.0, -1.0):
             for j in range(n):
                 trial[j] = best[j] + sign * size * weakest[j] / largest
-            refine(chain, T, trial, fixed, tolerance, budget)
+            refine(chain, T, trial, fixed, tolerance, budget, GROWTH, 0.0)
             position, rotation = check(chain, trial, T, state)
             if max(position, rotation) < max(best_position, best_rotation):
                 best_position, best_rotation = position, rotation
@@ -192,7 +202,7 @@ def find_twin(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.
         for sign in (1.0, -1.0):
             for j in range(n):
                 out[j] = q[j] + sign * size * weakest[j] / largest
-            refine(chain, T, out, fixed, tolerance)
+            refine(chain, T, out, fixed, tolerance, np.int64(4 * MAX_STEPS), GROWTH, 0.0)
             position, rotation = check(chain, out, T, state)
             if within(position, rotation, tolerance) and _apart(out, q, distinct):
                 new = True

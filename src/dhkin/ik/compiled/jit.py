@@ -1,11 +1,49 @@
-"""Compile options shared by every kernel."""
+"""Compile options shared by every kernel, and one version of each kernel per argument types.
+
+numba compiles a function once per distinct tuple of argument types. A kernel called from another
+kernel with a constant (``f(x, 0)``, ``f(x, True)``) gets that constant's *literal* type, a type of
+its own, so every constant a call site passes made another copy of the callee and of everything
+it calls: the family solvers were compiled three times, ``chain.refine`` six (a fresh install
+spent 77 s compiling its first ``ik``). :func:`jit` and :func:`jit_fma` compile kernels for the
+plain types of their arguments instead (int64, bool), which is what the code needs: no kernel
+branches on a literal at compile time. Call sites also pass every argument (an omitted default is
+a type of its own too).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 from numba import njit
+from numba.core import types
+
+
+def _plain_types(dispatcher: Any) -> Any:
+    """The numba dispatcher, typing calls from other kernels with unliteral argument types (see
+    the module docstring). Where this numba has no ``get_call_template`` (a private hook), the
+    dispatcher is left as it is: the kernels are correct either way, only compiled more often."""
+    original = getattr(dispatcher, "get_call_template", None)
+    if original is None:
+        return dispatcher
+
+    def get_call_template(args: tuple[Any, ...], kws: dict[str, Any]) -> Any:
+        return original(tuple(types.unliteral(a) for a in args),
+                        {k: types.unliteral(v) for k, v in kws.items()})
+
+    dispatcher.get_call_template = get_call_template
+    return dispatcher
+
+
+def _compiler(**options: Any) -> Callable[[Callable[..., Any]], Any]:
+    def decorate(function: Callable[..., Any]) -> Any:
+        return _plain_types(njit(**options)(function))
+
+    return decorate
+
 
 #: Cached on disk, IEEE division (no ZeroDivisionError checks), GIL released.
-jit = njit(cache=True, error_model="numpy", nogil=True)
+jit = _compiler(cache=True, error_model="numpy", nogil=True)
 #: The same, allowing a * b + c to contract into one fused multiply-add (more accurate, not
 #: less); nothing else of fast-math. Used by the elementary functions.
-jit_fma = njit(cache=True, error_model="numpy", nogil=True, fastmath={"contract"})
+jit_fma = _compiler(cache=True, error_model="numpy", nogil=True, fastmath={"contract"})

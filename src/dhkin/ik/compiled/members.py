@@ -57,7 +57,8 @@ def _member_distance(plan: NDArray[np.float64], g: NDArray[np.float64],
     with the free joint at t; inf where the branch has no such member."""
     moved[free] = t
     # a member that also passes the wrist singularity takes the seed's wrist split there
-    _family(plan, g, T, moved, bits | WRIST, clamp, q, valid, flags, near, why, scratch)
+    _family(plan, g, T, moved, np.int64(bits | WRIST), clamp, q, valid, flags, near, why,
+            scratch)
     if not valid[b] or (near[b] & bits) != bits:
         return math.inf
     _, chain, _ = plan_parts(plan)
@@ -157,14 +158,15 @@ def _member_in_limits(plan: NDArray[np.float64], g: NDArray[np.float64],
     for step in LIMIT_STEPS:
         for j in range(n):
             moved[j] = seed[j] + (step if fixed[j] else 0.0)
-        _family(plan, g, T, moved, bits, clamp, q, valid, flags, near, why, scratch)
+        _family(plan, g, T, moved, np.int64(bits), clamp, q, valid, flags, near, why, scratch)
         if not valid[b] or (near[b] & bits) != bits:
             continue
         for j in range(n):
             candidate[j] = q[b, j]
         _fix_free(plan, bits, fixed)
         position, rotation = _settle(plan, chain, T_at, candidate, fixed,
-                                     (near[b] & CLAMPED) != 0, False, tolerance, state)
+                                     (near[b] & CLAMPED) != 0, np.bool_(False), tolerance, state,
+                                     np.bool_(True))
         if exact.within(position, rotation, tolerance) and _in_limits(
                 chain, limits, candidate, tolerance / plan[PLAN.lever]):
             return position, rotation
@@ -188,7 +190,7 @@ def _family_free(plan: NDArray[np.float64], g: NDArray[np.float64],
     flags = np.empty(BRANCHES, np.uint8)
     near = np.empty(BRANCHES, np.uint8)
     why = np.empty(WHY_SIZE)
-    _family(plan, g, T, moved, WRIST, clamp, q, valid, flags, near, why, scratch)
+    _family(plan, g, T, moved, np.int64(WRIST), clamp, q, valid, flags, near, why, scratch)
     if not valid[b] or (near[b] & WRIST) == 0:
         return False
     position, rotation = exact.check(chain, q[b], T_at, state)

@@ -44,7 +44,8 @@ def _seed_root(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray
         return
     root = seed.copy()
     fixed = np.zeros(n, np.bool_)
-    position, rotation = exact.refine(chain, T, root, fixed, tolerance, 4 * exact.MAX_STEPS, 1.0,
+    position, rotation = exact.refine(chain, T, root, fixed, tolerance,
+                                      np.int64(4 * exact.MAX_STEPS), 1.0,
                                       exact.SEED_DAMPING)
     if not exact.within(position, rotation, tolerance):
         return
@@ -180,14 +181,15 @@ def _retry_corrected(plan: NDArray[np.float64], g: NDArray[np.float64],
         start = regular[b].copy()
         for _ in range(CORRECTIONS):
             _corrected_target(ideal, chain, start, T, corrected)
-            _family(plan, g, corrected, seed, 0, clamp, candidates, c_valid, c_flags, c_near,
-                    c_why, scratch)
+            _family(plan, g, corrected, seed, np.int64(0), clamp, candidates, c_valid, c_flags,
+                    c_near, c_why, scratch)
             if not _finite(candidates[b]):
                 break
             for j in range(n):
                 start[j] = candidates[b, j]
             trial = start.copy()
-            exact.refine(chain, T_at, trial, fixed, tolerance)
+            exact.refine(chain, T_at, trial, fixed, tolerance, np.int64(4 * exact.MAX_STEPS),
+                         exact.GROWTH, 0.0)
             position, rotation = exact.check(chain, trial, T_at, state)
             if exact.within(position, rotation, tolerance):
                 if not _known(chain, q, ok, trial):

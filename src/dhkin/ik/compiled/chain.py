@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.ik.compiled.elementary import atan2, sincos
-from dhkin.ik.compiled.jit import jit
+from dhkin.ik.compiled.jit import jit, jit_literal
 from dhkin.ik.compiled.layout import layout
 
 #: Columns of a ``chain`` row: the constant frame before the joint's motion, then the motion.
@@ -174,7 +174,7 @@ def within(position: float, rotation: float, tolerance: float) -> bool:
     return position <= tolerance and rotation <= tolerance
 
 
-@jit
+@jit_literal
 def _row_dot(T: NDArray[np.float64], r: int, state: NDArray[np.float64], c: int) -> float:
     """(R_t R^T)[r, c]: row r of the target's rotation times row c of the frame's."""
     return T[r, 0] * state[4 * c] + T[r, 1] * state[4 * c + 1] + T[r, 2] * state[4 * c + 2]

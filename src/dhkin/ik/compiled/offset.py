@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from dhkin.ik.compiled.bands import CLAMPED, ELBOW, FLAG_BAND, MERGE_ANGLE, SHOULDER, WRIST
 from dhkin.ik.compiled.copies import wrap
 from dhkin.ik.compiled.elementary import atan2, sincos
-from dhkin.ik.compiled.jit import jit
+from dhkin.ik.compiled.jit import jit, jit_literal
 from dhkin.ik.compiled.layout import layout
 
 GEOMETRY = layout("OffsetGeometry", [
@@ -74,7 +74,7 @@ def _rotate(g: NDArray[np.float64], axis: int, c: float, s: float, v0: float, v1
             c * v2 + s * (k0 * v1 - k1 * v0) + along * k2)
 
 
-@jit
+@jit_literal
 def _axis_rotate(g: NDArray[np.float64], joint: int, angle: float, v0: float, v1: float,
                  v2: float) -> tuple[float, float, float]:
     """Rotation by angle about joint axis ``joint`` (0-based) applied to the direction v."""
@@ -82,7 +82,7 @@ def _axis_rotate(g: NDArray[np.float64], joint: int, angle: float, v0: float, v1
     return _rotate(g, GEOMETRY.directions + 3 * joint, c, s, v0, v1, v2)
 
 
-@jit
+@jit_literal
 def _screw_apply(g: NDArray[np.float64], joint: int, c: float, s: float, v0: float, v1: float,
                  v2: float, point: bool) -> tuple[float, float, float]:
     """The rigid motion turning about the line of joint axis ``joint`` by the angle with cosine
@@ -95,7 +95,7 @@ def _screw_apply(g: NDArray[np.float64], joint: int, c: float, s: float, v0: flo
     return r0 + p0, r1 + p1, r2 + p2
 
 
-@jit
+@jit_literal
 def _motion_apply(g: NDArray[np.float64], T_home: NDArray[np.float64],
                   turns: tuple[float, float, float, float, float, float], v0: float, v1: float,
                   v2: float, point: bool) -> tuple[float, float, float]:

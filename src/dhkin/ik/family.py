@@ -38,13 +38,11 @@ import numpy as np
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
 from dhkin.ik import offset_wrist, spherical_wrist, stanford
-from dhkin.ik.geometry import Tolerance, deviation, problems, table_scale
+from dhkin.ik.geometry import EXACT_RELATIVE, Tolerance, deviation, problems, table_scale
 from dhkin.ik.spherical_wrist import Solved
 
 #: The band within which an exact chain counts as a member of a family (see module docstring).
 BAND = Tolerance(angle=0.02, length=0.002)
-#: Relative tolerance of the exact structure of an ideal model (|cos|, |sin|; x scale in m).
-EXACT_RELATIVE = 1e-9
 #: Joint vectors sampled (fixed seed) to measure the model deviation.
 DEVIATION_SAMPLES = 256
 

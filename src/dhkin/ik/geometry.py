@@ -194,3 +194,48 @@ def spherical_wrist_conditions(axes: Sequence[JointAxis]) -> list[Condition]:
         Condition("axes 5 and 6 perpendicular (|cos|)", abs_cos(axis5.direction, axis6.direction),
                   "angle", "zero"),
     ]
+
+
+# --------------------------------------------------------------------------------------------
+# Singularity factors: what each family module computes (see dhkin.singularity.model)
+
+#: The factors of det J of N configurations, each (N,): (constant, shoulder, elbow, wrist,
+#: shoulder distance, elbow distance) with det J = constant * shoulder * elbow * wrist.
+FactorArrays = tuple[Vector, Vector, Vector, Vector, Vector, Vector]
+
+
+def dots(a: Vector, b: Vector) -> Vector:
+    """Dot products along the last axis (batched)."""
+    return np.asarray(np.sum(a * b, axis=-1), dtype=np.float64)
+
+
+def closest_points(p1: Vector, z1: Vector, p2: Vector, z2: Vector) -> Vector:
+    """Midpoints of the shortest segments between lines (p1, z1) and (p2, z2) (unit z, not
+    parallel), batched over leading axes."""
+    w0 = p1 - p2
+    b = dots(z1, z2)
+    d = dots(z1, w0)
+    e = dots(z2, w0)
+    denominator = 1.0 - b * b
+    t1 = (b * e - d) / denominator
+    t2 = (e - b * d) / denominator
+    return np.asarray(0.5 * ((p1 + t1[..., None] * z1) + (p2 + t2[..., None] * z2)),
+                      dtype=np.float64)
+
+
+def standard_rows(table: DHTable) -> tuple[list[float], list[float], list[float]]:
+    """a_k, sin(alpha_k) and sign(cos(alpha_k)), 1-based (index 0 unused), of a standard table."""
+    a = [0.0] + [j.a for j in table.joints]
+    s_alpha = [0.0] + [float(np.sin(j.alpha)) for j in table.joints]
+    c_alpha = [0.0] + [float(np.copysign(1.0, np.cos(j.alpha))) for j in table.joints]
+    return a, s_alpha, c_alpha
+
+
+#: Relative tolerance of an exact structure (|cos|, |sin|; x the table scale in m): an ideal
+#: model fits its family, and a table's closed-form singularity factors apply, to this.
+EXACT_RELATIVE = 1e-9
+
+
+def exact_zero(table: DHTable) -> tuple[float, float]:
+    """(angle, length) tolerances of an exact structure (:data:`EXACT_RELATIVE`)."""
+    return EXACT_RELATIVE, EXACT_RELATIVE * table_scale(table)

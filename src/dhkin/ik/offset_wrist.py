@@ -48,11 +48,17 @@ from dhkin.ik.compiled.layout import pack
 from dhkin.ik.compiled.offset import GEOMETRY
 from dhkin.ik.geometry import (
     Condition,
+    FactorArrays,
+    Vector,
     abs_cos,
     abs_sin,
     closest_point,
+    closest_points,
+    dots,
+    exact_zero,
     line_distance,
     separation,
+    standard_rows,
     table_scale,
     type_conditions,
     zero_configuration,
@@ -159,3 +165,51 @@ def explain(solved: Solved, why: NDArray[np.float64], clamp: float) -> str:
         return (f"axis 4 would have to be {listed} m from axis 2 (per shoulder/wrist branch), "
                 f"{where} the arm's reach [{low:.6g}, {high:.6g}] m")
     return ""
+
+
+# --------------------------------------------------------------------------------------------
+# Singularity factors (dhkin.singularity.model documents the mathematics)
+
+
+def singularity_closed_form(table: DHTable) -> bool:
+    """Whether the standard-DH closed forms of the factors apply (axes 2, 3, 4 parallel through
+    alpha2, alpha3 = 0 or pi; the wrist point at DH frame 5's origin: a4 = a5 = 0)."""
+    angle, length = exact_zero(table)
+    rows = table.joints
+    return (table.convention == "standard" and abs(np.sin(rows[1].alpha)) <= angle
+            and abs(np.sin(rows[2].alpha)) <= angle and abs(rows[3].a) <= length
+            and abs(rows[4].a) <= length)
+
+
+def singularity_factors(table: DHTable, theta: Vector, d: Vector, product: float
+                        ) -> FactorArrays:
+    """The closed-form factors of N configurations (theta, d: (N, 6) DH variables; product:
+    the product of the joint directions)."""
+    a, s_alpha, c_alpha = standard_rows(table)
+    t = [np.zeros(len(theta))] + [theta[:, k] for k in range(6)]
+    k2, k3 = c_alpha[2], c_alpha[3]
+    d5 = table.joints[4].d
+    wrist = s_alpha[4] * s_alpha[5] * np.sin(t[5])
+    phi = t[2] + k2 * t[3]
+    psi = phi + k2 * k3 * t[4]
+    x_p = a[2] * np.cos(t[2]) + a[3] * np.cos(phi) + k2 * k3 * s_alpha[4] * d5 * np.sin(psi)
+    shoulder = -s_alpha[1] * (a[1] + x_p)
+    elbow = k2 * a[2] * a[3] * np.sin(t[3])
+    constant = np.full(len(theta), k2 * product)
+    return (constant, shoulder, elbow, wrist, np.abs(shoulder) / abs(s_alpha[1]),
+            np.abs(a[3] * np.sin(t[3])))
+
+
+def geometric_singularity_factors(o: Vector, z: Vector, product: float) -> FactorArrays:
+    """The factors from the joint axes (points o, directions z: (N, 6, 3), any convention)."""
+    o1, o2, o3, o4, o5, o6 = (o[:, k] for k in range(6))
+    z1, z2, z3, z4, z5, z6 = (z[:, k] for k in range(6))
+    wrist = dots(z4, np.cross(z5, z6))
+    point = closest_points(o5, z5, o6, z6)
+    shoulder = dots(np.cross(z1, point - o1), z2)
+    elbow = dots(z2, np.cross(o2 - o3, o3 - o4))
+    between = o3 - o2
+    axis_23 = np.linalg.norm(between - dots(between, z2)[:, None] * z2, axis=-1)
+    axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
+    constant = np.sign(dots(z2, z3)) * product
+    return constant, shoulder, elbow, wrist, np.abs(shoulder) / axis_12, np.abs(elbow) / axis_23

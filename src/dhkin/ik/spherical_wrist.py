@@ -55,14 +55,19 @@ from dhkin.ik.compiled.layout import pack
 from dhkin.ik.compiled.spherical import GEOMETRY
 from dhkin.ik.geometry import (
     Condition,
+    FactorArrays,
     JointAxis,
     Vector,
     abs_cos,
     abs_sin,
+    closest_points,
     common_point,
+    dots,
+    exact_zero,
     point_line_distance,
     separation,
     spherical_wrist_conditions,
+    standard_rows,
     table_scale,
     type_conditions,
     zero_configuration,
@@ -275,3 +280,49 @@ def explain(solved: Solved, why: NDArray[np.float64], clamp: float) -> str:
 def _listed(values: NDArray[np.float64]) -> str:
     unique = sorted({float(f"{v:.6g}") for v in values})
     return " / ".join(f"{v:.6g}" for v in unique)
+
+
+# --------------------------------------------------------------------------------------------
+# Singularity factors (dhkin.singularity.model documents the mathematics)
+
+
+def singularity_closed_form(table: DHTable) -> bool:
+    """Whether the standard-DH closed forms of the factors apply (a1 free; axis 2 parallel to 3
+    through alpha2 = 0 or pi; the wrist centre at DH frame 4's origin: a4 = a5 = d5 = 0)."""
+    angle, length = exact_zero(table)
+    rows = table.joints
+    return (table.convention == "standard" and abs(np.sin(rows[1].alpha)) <= angle
+            and abs(rows[3].a) <= length and abs(rows[4].a) <= length
+            and abs(rows[4].d) <= length)
+
+
+def singularity_factors(table: DHTable, theta: Vector, d: Vector, product: float
+                        ) -> FactorArrays:
+    """The closed-form factors of N configurations (theta, d: (N, 6) DH variables; product:
+    the product of the joint directions)."""
+    a, s_alpha, c_alpha = standard_rows(table)
+    t = [np.zeros(len(theta))] + [theta[:, k] for k in range(6)]
+    d4 = table.joints[3].d
+    wrist = s_alpha[4] * s_alpha[5] * np.sin(t[5])
+    u = a[3] * np.cos(t[3]) + d4 * s_alpha[3] * np.sin(t[3])
+    v = a[3] * np.sin(t[3]) - d4 * s_alpha[3] * np.cos(t[3])
+    x_w = np.cos(t[2]) * (a[2] + u) - c_alpha[2] * np.sin(t[2]) * v
+    shoulder = -s_alpha[1] * (a[1] + x_w)
+    elbow = c_alpha[2] * a[2] * v
+    constant = np.full(len(theta), c_alpha[2] * product)
+    return constant, shoulder, elbow, wrist, np.abs(shoulder) / abs(s_alpha[1]), np.abs(v)
+
+
+def geometric_singularity_factors(o: Vector, z: Vector, product: float) -> FactorArrays:
+    """The factors from the joint axes (points o, directions z: (N, 6, 3), any convention)."""
+    o1, o2, o3, o4, o5 = (o[:, k] for k in range(5))
+    z1, z2, z3, z4, z5, z6 = (z[:, k] for k in range(6))
+    wrist = dots(z4, np.cross(z5, z6))
+    centre = closest_points(o4, z4, o5, z5)
+    shoulder = dots(np.cross(z1, centre - o1), z2)
+    elbow = dots(z2, np.cross(centre - o2, centre - o3))
+    between = o3 - o2
+    axis_23 = np.linalg.norm(between - dots(between, z2)[:, None] * z2, axis=-1)
+    axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
+    constant = np.sign(dots(z2, z3)) * product
+    return constant, shoulder, elbow, wrist, np.abs(shoulder) / axis_12, np.abs(elbow) / axis_23

@@ -36,8 +36,14 @@ from dhkin.ik.compiled.layout import pack
 from dhkin.ik.compiled.spherical import GEOMETRY
 from dhkin.ik.geometry import (
     Condition,
+    FactorArrays,
+    Vector,
     abs_cos,
+    closest_points,
+    dots,
+    exact_zero,
     spherical_wrist_conditions,
+    standard_rows,
     table_scale,
     type_conditions,
     zero_configuration,
@@ -126,3 +132,48 @@ def explain(solved: Solved, why: NDArray[np.float64], clamp: float) -> str:
         return (f"the wrist centre is {float(distances.min()):.6g} m from axis 2, closer than "
                 f"the slide line's distance {offset:.6g} m from it")
     return ""
+
+
+# --------------------------------------------------------------------------------------------
+# Singularity factors (dhkin.singularity.model documents the mathematics; no elbow: the elbow
+# factor is the extension e, and its distance NaN)
+
+
+def singularity_closed_form(table: DHTable) -> bool:
+    """Whether the standard-DH closed forms of the factors apply (Spong's frames: a2 = a3 = 0,
+    a4 = d4 = 0, a5 = d5 = 0, |sin alpha2| = 1)."""
+    angle, length = exact_zero(table)
+    rows = table.joints
+    return (table.convention == "standard" and abs(rows[1].a) <= length
+            and abs(rows[2].a) <= length and abs(rows[3].d) <= length
+            and abs(rows[3].a) <= length and abs(rows[4].a) <= length
+            and abs(rows[4].d) <= length and abs(abs(np.sin(rows[1].alpha)) - 1.0) <= angle)
+
+
+def singularity_factors(table: DHTable, theta: Vector, d: Vector, product: float
+                        ) -> FactorArrays:
+    """The closed-form factors of N configurations (theta, d: (N, 6) DH variables; product:
+    the product of the joint directions)."""
+    a, s_alpha, _ = standard_rows(table)
+    t = [np.zeros(len(theta))] + [theta[:, k] for k in range(6)]
+    extension = d[:, 2]
+    wrist = s_alpha[4] * s_alpha[5] * np.sin(t[5])
+    shoulder = -s_alpha[1] * (a[1] + s_alpha[2] * extension * np.sin(t[2]))
+    constant = np.full(len(theta), -product)
+    return (constant, shoulder, extension, wrist, np.abs(shoulder) / abs(s_alpha[1]),
+            np.full(len(theta), np.nan))
+
+
+def geometric_singularity_factors(o: Vector, z: Vector, product: float) -> FactorArrays:
+    """The factors from the joint axes (points o, directions z: (N, 6, 3), any convention)."""
+    o1, o2, _, o4, o5 = (o[:, k] for k in range(5))
+    z1, z2, z3, z4, z5, z6 = (z[:, k] for k in range(6))
+    wrist = dots(z4, np.cross(z5, z6))
+    centre = closest_points(o4, z4, o5, z5)
+    shoulder = dots(np.cross(z1, centre - o1), z2)
+    meeting = closest_points(o2, z2, centre, z3)
+    extension = dots(centre - meeting, z3)
+    axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
+    constant = np.full(len(o), -product)
+    return (constant, shoulder, extension, wrist, np.abs(shoulder) / axis_12,
+            np.full(len(o), np.nan))

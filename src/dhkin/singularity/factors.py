@@ -1,20 +1,16 @@
-"""The factors of det J (shoulder, elbow, wrist) of N configurations, and the joint axes they are
-computed from (see :mod:`dhkin.singularity.model`).
+"""The factors of det J (shoulder, elbow, wrist) of N configurations (computed by each family's
+module, :mod:`dhkin.ik.family`; the mathematics: :mod:`dhkin.singularity.model`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.errors import InputError
 from dhkin.singularity.thresholds import KINDS, Array
-
-if TYPE_CHECKING:
-    pass
 
 
 @dataclass(frozen=True)
@@ -67,21 +63,3 @@ class Factors:
         return Factors(self.family, *(np.atleast_1d(getattr(self, name)[index]) for name in
                                       ("constant", "shoulder", "elbow", "wrist",
                                        "shoulder_distance", "elbow_distance")))
-
-
-def _dot(a: Array, b: Array) -> Array:
-    """Dot products along the last axis."""
-    return np.sum(a * b, axis=-1)
-
-
-def _closest_point(p1: Array, z1: Array, p2: Array, z2: Array) -> Array:
-    """Midpoint of the shortest segment between lines (p1, z1) and (p2, z2) (unit z, not
-    parallel), batched over leading axes."""
-    w0 = p1 - p2
-    b = _dot(z1, z2)
-    d = _dot(z1, w0)
-    e = _dot(z2, w0)
-    denominator = 1.0 - b * b
-    t1 = (b * e - d) / denominator
-    t2 = (e - b * d) / denominator
-    return 0.5 * ((p1 + t1[..., None] * z1) + (p2 + t2[..., None] * z2))

@@ -90,37 +90,13 @@ from numpy.typing import ArrayLike
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError, InputError, UnreachableError
-from dhkin.ik.family import EXACT_RELATIVE, FamilyFit, fit_family
-from dhkin.ik.geometry import joint_axes, table_scale
-from dhkin.singularity.factors import Factors, _closest_point, _dot
+from dhkin.ik.family import FAMILIES, FamilyFit, fit_family
+from dhkin.ik.geometry import joint_axes
+from dhkin.singularity.factors import Factors
 from dhkin.singularity.thresholds import KINDS, MOVING_JOINT, Array
 
 if TYPE_CHECKING:
     from dhkin.arm import Arm
-
-
-def _closed_form_available(table: DHTable, family: str) -> bool:
-    """Whether the standard-DH closed forms of the module docstring apply to this table."""
-    if table.convention != "standard":
-        return False
-    rows = table.joints
-    tol = EXACT_RELATIVE * table_scale(table)  # the family's exact-structure tolerance
-
-    def zero(x: float) -> bool:
-        return abs(x) <= tol
-
-    def sin_zero(alpha: float) -> bool:
-        return abs(math.sin(alpha)) <= EXACT_RELATIVE
-
-    if family == "spherical_wrist":
-        return sin_zero(rows[1].alpha) and zero(rows[3].a) and zero(rows[4].a) \
-            and zero(rows[4].d)
-    if family == "offset_wrist":
-        return sin_zero(rows[1].alpha) and sin_zero(rows[2].alpha) and zero(rows[3].a) \
-            and zero(rows[4].a)
-    return zero(rows[1].a) and zero(rows[2].a) and zero(rows[3].d) and zero(rows[3].a) \
-        and zero(rows[4].a) and zero(rows[4].d) \
-        and abs(abs(math.sin(rows[1].alpha)) - 1.0) <= EXACT_RELATIVE
 
 
 def family_fit(table: DHTable) -> FamilyFit:
@@ -165,7 +141,9 @@ class SingularityModel:
         self.table = fit.ideal
         self.exact_table = table
         self.family = fit.family
-        self.closed_form = _closed_form_available(fit.ideal, self.family)
+        #: The family's module: its structure, ideal geometry, labels and singularity factors.
+        self._module = FAMILIES[fit.family]
+        self.closed_form = bool(self._module.singularity_closed_form(fit.ideal))
         self.kinds: tuple[str, ...] = (("wrist", "shoulder") if self.family == "stanford"
                                        else KINDS)
         self.directions = np.array([j.direction for j in table.joints], dtype=float)
@@ -197,79 +175,26 @@ class SingularityModel:
     # closed forms ---------------------------------------------------------------------------
 
     def closed_form_factors(self, q: ArrayLike) -> Factors:
-        """The closed forms of the module docstring (standard DH tables of the family)."""
+        """The closed forms of the module docstring (standard DH tables of the family), from the
+        family's module (:mod:`dhkin.ik.family` registry)."""
         if not self.closed_form:
             raise FamilyError(f"{self.table.name}: no closed form for this table "
                               f"({self.table.convention} DH); use geometric_factors")
         Q = self._batch(q)
         theta, d = self.table.dh_parameters(Q)
-        rows = self.table.joints
-        a = [0.0] + [j.a for j in rows]
-        s_alpha = [0.0] + [math.sin(j.alpha) for j in rows]
-        c_alpha = [0.0] + [math.copysign(1.0, math.cos(j.alpha)) for j in rows]
-        t = [np.zeros(len(Q))] + [theta[:, k] for k in range(6)]
         product = float(np.prod(self.directions))
-        wrist = s_alpha[4] * s_alpha[5] * np.sin(t[5])
-        if self.family == "spherical_wrist":
-            d4 = rows[3].d
-            u = a[3] * np.cos(t[3]) + d4 * s_alpha[3] * np.sin(t[3])
-            v = a[3] * np.sin(t[3]) - d4 * s_alpha[3] * np.cos(t[3])
-            x_w = np.cos(t[2]) * (a[2] + u) - c_alpha[2] * np.sin(t[2]) * v
-            shoulder = -s_alpha[1] * (a[1] + x_w)
-            elbow = c_alpha[2] * a[2] * v
-            constant = c_alpha[2] * product
-            elbow_distance = np.abs(v)
-        elif self.family == "offset_wrist":
-            k2, k3 = c_alpha[2], c_alpha[3]
-            d5 = rows[4].d
-            phi = t[2] + k2 * t[3]
-            psi = phi + k2 * k3 * t[4]
-            x_p = a[2] * np.cos(t[2]) + a[3] * np.cos(phi) + k2 * k3 * s_alpha[4] * d5 * np.sin(psi)
-            shoulder = -s_alpha[1] * (a[1] + x_p)
-            elbow = k2 * a[2] * a[3] * np.sin(t[3])
-            constant = k2 * product
-            elbow_distance = np.abs(a[3] * np.sin(t[3]))
-        else:  # stanford
-            extension = d[:, 2]
-            shoulder = -s_alpha[1] * (a[1] + s_alpha[2] * extension * np.sin(t[2]))
-            elbow = extension
-            constant = -product
-            elbow_distance = np.full(len(Q), np.nan)
-        return Factors(self.family, np.full(len(Q), constant), shoulder, elbow, wrist,
-                       np.abs(shoulder) / abs(s_alpha[1]), elbow_distance)
+        return Factors(self.family, *self._module.singularity_factors(self.table, theta, d,
+                                                                       product))
 
     # geometric form -------------------------------------------------------------------------
 
     def geometric_factors(self, q: ArrayLike) -> Factors:
-        """The factors from the joint axes (any DH convention); see the module docstring."""
+        """The factors from the joint axes (any DH convention), from the family's module; see
+        the module docstring."""
         Q = self._batch(q)
         o, z = joint_axes(self.table, Q)
-        o1, o2, o3, o4, o5, o6 = (o[:, k] for k in range(6))
-        z1, z2, z3, z4, z5, z6 = (z[:, k] for k in range(6))
         product = float(np.prod(self.directions))
-        wrist = _dot(z4, np.cross(z5, z6))
-        axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
-        if self.family == "offset_wrist":
-            point = _closest_point(o5, z5, o6, z6)
-        else:
-            point = _closest_point(o4, z4, o5, z5)
-        shoulder = _dot(np.cross(z1, point - o1), z2)
-        if self.family == "stanford":
-            meeting = _closest_point(o2, z2, point, z3)
-            elbow = _dot(point - meeting, z3)
-            constant = np.full(len(Q), -product)
-            elbow_distance = np.full(len(Q), np.nan)
-        else:
-            between = o3 - o2
-            axis_23 = np.linalg.norm(between - _dot(between, z2)[:, None] * z2, axis=-1)
-            if self.family == "spherical_wrist":
-                elbow = _dot(z2, np.cross(point - o2, point - o3))
-            else:
-                elbow = _dot(z2, np.cross(o2 - o3, o3 - o4))
-            constant = np.sign(_dot(z2, z3)) * product
-            elbow_distance = np.abs(elbow) / axis_23
-        return Factors(self.family, constant, shoulder, elbow, wrist,
-                       np.abs(shoulder) / axis_12, elbow_distance)
+        return Factors(self.family, *self._module.geometric_singularity_factors(o, z, product))
 
     # formulas and placement -----------------------------------------------------------------
 

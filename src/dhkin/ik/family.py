@@ -7,7 +7,8 @@ origin by up to millimetres and milliradians. A family is therefore chosen withi
 1. The **ideal model** is the nominal table (corrections dropped) with every alpha within
    :data:`BAND.angle` (rad) of a multiple of 90 degrees set onto it and every a, d within
    :data:`BAND.length` (m) of 0 set to 0. It must fit the family exactly (to
-   :data:`EXACT`: 1e-9 in |cos| / |sin|, 1e-9 x the table scale in metres).
+   :data:`dhkin.ik.geometry.EXACT_RELATIVE`: 1e-9 in |cos| / |sin|, 1e-9 x the table scale in
+   metres).
 2. The **exact chain** (the table as written, corrections included) must fit the family within
    the band: each structural condition (|cos| of axes that should be perpendicular, |sin| of
    axes that should be parallel, distance between axes that should meet) at most the band.
@@ -38,7 +39,7 @@ import numpy as np
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError
 from dhkin.ik import offset_wrist, spherical_wrist, stanford
-from dhkin.ik.geometry import EXACT_RELATIVE, Tolerance, deviation, problems, table_scale
+from dhkin.ik.geometry import Tolerance, deviation, exact_tolerance, problems
 from dhkin.ik.spherical_wrist import Solved
 
 #: The band within which an exact chain counts as a member of a family (see module docstring).
@@ -54,11 +55,6 @@ FAMILIES: dict[str, ModuleType] = {
 }
 _EXPLAIN: dict[str, Callable[..., str]] = {name: module.explain
                                            for name, module in FAMILIES.items()}
-
-
-def exact_tolerance(table: DHTable) -> Tolerance:
-    """The tolerance of an exact structure: 1e-9 in |cos| / |sin|, 1e-9 x scale in metres."""
-    return Tolerance(EXACT_RELATIVE, EXACT_RELATIVE * table_scale(table))
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,7 @@ fit within the band of the family (:mod:`dhkin.ik.family`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -223,11 +224,31 @@ def closest_points(p1: Vector, z1: Vector, p2: Vector, z2: Vector) -> Vector:
                       dtype=np.float64)
 
 
+def wrist_and_shoulder(o: Vector, z: Vector, point: Vector) -> tuple[Vector, Vector, Vector]:
+    """The geometric wrist factor z4 . (z5 x z6), the shoulder factor (z1 x (point - o1)) . z2
+    and the shoulder distance |shoulder| / |z1 x z2| of N configurations (o, z: (N, 6, 3) joint
+    axes; point (N, 3): the family's wrist centre or wrist point)."""
+    o1 = o[:, 0]
+    z1, z2, z4, z5, z6 = z[:, 0], z[:, 1], z[:, 3], z[:, 4], z[:, 5]
+    wrist = dots(z4, np.cross(z5, z6))
+    shoulder = dots(np.cross(z1, point - o1), z2)
+    axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
+    return wrist, shoulder, np.abs(shoulder) / axis_12
+
+
+def elbow_distance(o: Vector, z: Vector, elbow: Vector) -> Vector:
+    """|elbow factor| / the distance between the parallel axes 2 and 3 (m), N configurations."""
+    between = o[:, 2] - o[:, 1]
+    z2 = z[:, 1]
+    axis_23 = np.linalg.norm(between - dots(between, z2)[:, None] * z2, axis=-1)
+    return np.asarray(np.abs(elbow) / axis_23, dtype=np.float64)
+
+
 def standard_rows(table: DHTable) -> tuple[list[float], list[float], list[float]]:
     """a_k, sin(alpha_k) and sign(cos(alpha_k)), 1-based (index 0 unused), of a standard table."""
     a = [0.0] + [j.a for j in table.joints]
-    s_alpha = [0.0] + [float(np.sin(j.alpha)) for j in table.joints]
-    c_alpha = [0.0] + [float(np.copysign(1.0, np.cos(j.alpha))) for j in table.joints]
+    s_alpha = [0.0] + [math.sin(j.alpha) for j in table.joints]
+    c_alpha = [0.0] + [math.copysign(1.0, math.cos(j.alpha)) for j in table.joints]
     return a, s_alpha, c_alpha
 
 
@@ -236,6 +257,7 @@ def standard_rows(table: DHTable) -> tuple[list[float], list[float], list[float]
 EXACT_RELATIVE = 1e-9
 
 
-def exact_zero(table: DHTable) -> tuple[float, float]:
-    """(angle, length) tolerances of an exact structure (:data:`EXACT_RELATIVE`)."""
-    return EXACT_RELATIVE, EXACT_RELATIVE * table_scale(table)
+def exact_tolerance(table: DHTable) -> Tolerance:
+    """The tolerance of an exact structure: :data:`EXACT_RELATIVE` in |cos| / |sin|, that times
+    the table scale in metres."""
+    return Tolerance(EXACT_RELATIVE, EXACT_RELATIVE * table_scale(table))

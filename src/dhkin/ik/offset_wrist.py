@@ -55,12 +55,14 @@ from dhkin.ik.geometry import (
     closest_point,
     closest_points,
     dots,
-    exact_zero,
+    elbow_distance,
+    exact_tolerance,
     line_distance,
     separation,
     standard_rows,
     table_scale,
     type_conditions,
+    wrist_and_shoulder,
     zero_configuration,
 )
 from dhkin.ik.spherical_wrist import Solved
@@ -174,7 +176,8 @@ def explain(solved: Solved, why: NDArray[np.float64], clamp: float) -> str:
 def singularity_closed_form(table: DHTable) -> bool:
     """Whether the standard-DH closed forms of the factors apply (axes 2, 3, 4 parallel through
     alpha2, alpha3 = 0 or pi; the wrist point at DH frame 5's origin: a4 = a5 = 0)."""
-    angle, length = exact_zero(table)
+    exact = exact_tolerance(table)
+    angle, length = exact.angle, exact.length
     rows = table.joints
     return (table.convention == "standard" and abs(np.sin(rows[1].alpha)) <= angle
             and abs(np.sin(rows[2].alpha)) <= angle and abs(rows[3].a) <= length
@@ -202,14 +205,10 @@ def singularity_factors(table: DHTable, theta: Vector, d: Vector, product: float
 
 def geometric_singularity_factors(o: Vector, z: Vector, product: float) -> FactorArrays:
     """The factors from the joint axes (points o, directions z: (N, 6, 3), any convention)."""
-    o1, o2, o3, o4, o5, o6 = (o[:, k] for k in range(6))
-    z1, z2, z3, z4, z5, z6 = (z[:, k] for k in range(6))
-    wrist = dots(z4, np.cross(z5, z6))
+    o2, o3, o4, o5, o6 = (o[:, k] for k in range(1, 6))
+    z2, z3, z5, z6 = z[:, 1], z[:, 2], z[:, 4], z[:, 5]
     point = closest_points(o5, z5, o6, z6)
-    shoulder = dots(np.cross(z1, point - o1), z2)
+    wrist, shoulder, shoulder_distance = wrist_and_shoulder(o, z, point)
     elbow = dots(z2, np.cross(o2 - o3, o3 - o4))
-    between = o3 - o2
-    axis_23 = np.linalg.norm(between - dots(between, z2)[:, None] * z2, axis=-1)
-    axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
     constant = np.sign(dots(z2, z3)) * product
-    return constant, shoulder, elbow, wrist, np.abs(shoulder) / axis_12, np.abs(elbow) / axis_23
+    return constant, shoulder, elbow, wrist, shoulder_distance, elbow_distance(o, z, elbow)

@@ -63,13 +63,15 @@ from dhkin.ik.geometry import (
     closest_points,
     common_point,
     dots,
-    exact_zero,
+    elbow_distance,
+    exact_tolerance,
     point_line_distance,
     separation,
     spherical_wrist_conditions,
     standard_rows,
     table_scale,
     type_conditions,
+    wrist_and_shoulder,
     zero_configuration,
 )
 
@@ -289,7 +291,8 @@ def _listed(values: NDArray[np.float64]) -> str:
 def singularity_closed_form(table: DHTable) -> bool:
     """Whether the standard-DH closed forms of the factors apply (a1 free; axis 2 parallel to 3
     through alpha2 = 0 or pi; the wrist centre at DH frame 4's origin: a4 = a5 = d5 = 0)."""
-    angle, length = exact_zero(table)
+    exact = exact_tolerance(table)
+    angle, length = exact.angle, exact.length
     rows = table.joints
     return (table.convention == "standard" and abs(np.sin(rows[1].alpha)) <= angle
             and abs(rows[3].a) <= length and abs(rows[4].a) <= length
@@ -315,14 +318,10 @@ def singularity_factors(table: DHTable, theta: Vector, d: Vector, product: float
 
 def geometric_singularity_factors(o: Vector, z: Vector, product: float) -> FactorArrays:
     """The factors from the joint axes (points o, directions z: (N, 6, 3), any convention)."""
-    o1, o2, o3, o4, o5 = (o[:, k] for k in range(5))
-    z1, z2, z3, z4, z5, z6 = (z[:, k] for k in range(6))
-    wrist = dots(z4, np.cross(z5, z6))
+    o2, o3, o4, o5 = (o[:, k] for k in range(1, 5))
+    z2, z3, z4, z5 = (z[:, k] for k in range(1, 5))
     centre = closest_points(o4, z4, o5, z5)
-    shoulder = dots(np.cross(z1, centre - o1), z2)
+    wrist, shoulder, shoulder_distance = wrist_and_shoulder(o, z, centre)
     elbow = dots(z2, np.cross(centre - o2, centre - o3))
-    between = o3 - o2
-    axis_23 = np.linalg.norm(between - dots(between, z2)[:, None] * z2, axis=-1)
-    axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
     constant = np.sign(dots(z2, z3)) * product
-    return constant, shoulder, elbow, wrist, np.abs(shoulder) / axis_12, np.abs(elbow) / axis_23
+    return constant, shoulder, elbow, wrist, shoulder_distance, elbow_distance(o, z, elbow)

@@ -41,11 +41,12 @@ from dhkin.ik.geometry import (
     abs_cos,
     closest_points,
     dots,
-    exact_zero,
+    exact_tolerance,
     spherical_wrist_conditions,
     standard_rows,
     table_scale,
     type_conditions,
+    wrist_and_shoulder,
     zero_configuration,
 )
 from dhkin.ik.spherical_wrist import (
@@ -142,7 +143,8 @@ def explain(solved: Solved, why: NDArray[np.float64], clamp: float) -> str:
 def singularity_closed_form(table: DHTable) -> bool:
     """Whether the standard-DH closed forms of the factors apply (Spong's frames: a2 = a3 = 0,
     a4 = d4 = 0, a5 = d5 = 0, |sin alpha2| = 1)."""
-    angle, length = exact_zero(table)
+    exact = exact_tolerance(table)
+    angle, length = exact.angle, exact.length
     rows = table.joints
     return (table.convention == "standard" and abs(rows[1].a) <= length
             and abs(rows[2].a) <= length and abs(rows[3].d) <= length
@@ -166,14 +168,11 @@ def singularity_factors(table: DHTable, theta: Vector, d: Vector, product: float
 
 def geometric_singularity_factors(o: Vector, z: Vector, product: float) -> FactorArrays:
     """The factors from the joint axes (points o, directions z: (N, 6, 3), any convention)."""
-    o1, o2, _, o4, o5 = (o[:, k] for k in range(5))
-    z1, z2, z3, z4, z5, z6 = (z[:, k] for k in range(6))
-    wrist = dots(z4, np.cross(z5, z6))
+    o2, o4, o5 = o[:, 1], o[:, 3], o[:, 4]
+    z2, z3, z4, z5 = (z[:, k] for k in range(1, 5))
     centre = closest_points(o4, z4, o5, z5)
-    shoulder = dots(np.cross(z1, centre - o1), z2)
+    wrist, shoulder, shoulder_distance = wrist_and_shoulder(o, z, centre)
     meeting = closest_points(o2, z2, centre, z3)
     extension = dots(centre - meeting, z3)
-    axis_12 = np.linalg.norm(np.cross(z1, z2), axis=-1)
     constant = np.full(len(o), -product)
-    return (constant, shoulder, extension, wrist, np.abs(shoulder) / axis_12,
-            np.full(len(o), np.nan))
+    return constant, shoulder, extension, wrist, shoulder_distance, np.full(len(o), np.nan)

@@ -132,8 +132,8 @@ class SingularityModel:
     joint axes (any convention). ``geometric_factors`` is always available, as a cross-check.
     """
 
-    def __init__(self, table: DHTable) -> None:
-        fit = family_fit(table)
+    def __init__(self, table: DHTable, fit: FamilyFit | None = None) -> None:
+        fit = fit if fit is not None else family_fit(table)
         #: The family's ideal model of the table (dhkin.ik.family): the factors are those of the
         #: ideal structure; a table within the family's band (rounded constants, calibration)
         #: differs from it by at most ``fit.model_deviation``, and Pinocchio's numbers in the
@@ -248,9 +248,13 @@ class SingularityModel:
 
 
 def singularity_model(robot_or_table: Arm | DHTable) -> SingularityModel:
-    """The analytic model of a robot or a table (FamilyError outside the families)."""
-    table = robot_or_table if isinstance(robot_or_table, DHTable) else robot_or_table.table
-    return SingularityModel(table)
+    """The analytic model of a robot or a table (FamilyError outside the families). A robot's
+    model reuses the family fit its closed-form IK already made (fitting costs ~3 ms)."""
+    if isinstance(robot_or_table, DHTable):
+        return SingularityModel(robot_or_table)
+    robot = robot_or_table
+    fit = robot.ik_solver.fit if robot.has_closed_form else None
+    return SingularityModel(robot.table, fit)
 
 
 def _number(value: float) -> str:

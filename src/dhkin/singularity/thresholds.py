@@ -8,17 +8,11 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.errors import InputError
-
-if TYPE_CHECKING:
-    pass
-
-
 
 KINDS: tuple[str, ...] = ("wrist", "elbow", "shoulder")
 

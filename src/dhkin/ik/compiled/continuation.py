@@ -114,7 +114,7 @@ def refine_along(ideal: NDArray[np.float64], exact: NDArray[np.float64],
         if target < 1.0:
             interpolate(ideal, path, target, work)
         trial = start.copy()
-        position, rotation = refine(model, T, trial, fixed, tolerance, np.int64(4 * MAX_STEPS),
+        position, rotation = refine(model, T, trial, fixed, tolerance, 4 * MAX_STEPS,
                                     GROWTH, 0.0)
         if within(position, rotation, tolerance):
             t = target
@@ -202,7 +202,7 @@ def find_twin(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.
         for sign in (1.0, -1.0):
             for j in range(n):
                 out[j] = q[j] + sign * size * weakest[j] / largest
-            refine(chain, T, out, fixed, tolerance, np.int64(4 * MAX_STEPS), GROWTH, 0.0)
+            refine(chain, T, out, fixed, tolerance, 4 * MAX_STEPS, GROWTH, 0.0)
             position, rotation = check(chain, out, T, state)
             if within(position, rotation, tolerance) and _apart(out, q, distinct):
                 new = True

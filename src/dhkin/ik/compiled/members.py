@@ -15,12 +15,11 @@ from dhkin.ik.compiled.bands import CLAMPED, SHOULDER, WRIST
 from dhkin.ik.compiled.copies import turn_range
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.plan import (
-    BRANCHES,
     PLAN,
-    WHY_SIZE,
     _family,
     _fix_free,
     _seed_distance,
+    family_outputs,
     plan_parts,
 )
 from dhkin.ik.compiled.settle import _settle
@@ -57,8 +56,7 @@ def _member_distance(plan: NDArray[np.float64], g: NDArray[np.float64],
     with the free joint at t; inf where the branch has no such member."""
     moved[free] = t
     # a member that also passes the wrist singularity takes the seed's wrist split there
-    _family(plan, g, T, moved, np.int64(bits | WRIST), clamp, q, valid, flags, near, why,
-            scratch)
+    _family(plan, g, T, moved, bits | WRIST, clamp, q, valid, flags, near, why, scratch)
     if not valid[b] or (near[b] & bits) != bits:
         return math.inf
     _, chain, _ = plan_parts(plan)
@@ -76,11 +74,7 @@ def _nearest_member(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArra
     returns the member's flags (-1 when none)."""
     n = seed.shape[0]
     free = int(plan[PLAN.free_shoulder]) if bits & SHOULDER else int(plan[PLAN.free_elbow])
-    q = np.empty((BRANCHES, n))
-    valid = np.empty(BRANCHES, np.bool_)
-    flags = np.empty(BRANCHES, np.uint8)
-    near = np.empty(BRANCHES, np.uint8)
-    why = np.empty(WHY_SIZE)
+    q, valid, flags, near, why = family_outputs(n)
     moved = seed.copy()
     best_t, best = seed[free], math.inf
     for k in range(-MEMBER_GRID, MEMBER_GRID + 1):
@@ -148,25 +142,20 @@ def _member_in_limits(plan: NDArray[np.float64], g: NDArray[np.float64],
     LIMIT_STEPS, the first that verifies and lies within the limits, into ``candidate``;
     returns its errors (inf when none)."""
     n = seed.shape[0]
-    q = np.empty((BRANCHES, n))
-    valid = np.empty(BRANCHES, np.bool_)
-    flags = np.empty(BRANCHES, np.uint8)
-    near = np.empty(BRANCHES, np.uint8)
-    why = np.empty(WHY_SIZE)
+    q, valid, flags, near, why = family_outputs(n)
     moved = seed.copy()
     _fix_free(plan, bits, fixed)
     for step in LIMIT_STEPS:
         for j in range(n):
             moved[j] = seed[j] + (step if fixed[j] else 0.0)
-        _family(plan, g, T, moved, np.int64(bits), clamp, q, valid, flags, near, why, scratch)
+        _family(plan, g, T, moved, bits, clamp, q, valid, flags, near, why, scratch)
         if not valid[b] or (near[b] & bits) != bits:
             continue
         for j in range(n):
             candidate[j] = q[b, j]
         _fix_free(plan, bits, fixed)
         position, rotation = _settle(plan, chain, T_at, candidate, fixed,
-                                     (near[b] & CLAMPED) != 0, np.bool_(False), tolerance, state,
-                                     np.bool_(True))
+                                     (near[b] & CLAMPED) != 0, False, tolerance, state, True)
         if exact.within(position, rotation, tolerance) and _in_limits(
                 chain, limits, candidate, tolerance / plan[PLAN.lever]):
             return position, rotation
@@ -185,12 +174,8 @@ def _family_free(plan: NDArray[np.float64], g: NDArray[np.float64],
     moved = solution.copy()
     moved[3] += math.pi
     moved[5] += math.pi
-    q = np.empty((BRANCHES, n))
-    valid = np.empty(BRANCHES, np.bool_)
-    flags = np.empty(BRANCHES, np.uint8)
-    near = np.empty(BRANCHES, np.uint8)
-    why = np.empty(WHY_SIZE)
-    _family(plan, g, T, moved, np.int64(WRIST), clamp, q, valid, flags, near, why, scratch)
+    q, valid, flags, near, why = family_outputs(n)
+    _family(plan, g, T, moved, WRIST, clamp, q, valid, flags, near, why, scratch)
     if not valid[b] or (near[b] & WRIST) == 0:
         return False
     position, rotation = exact.check(chain, q[b], T_at, state)

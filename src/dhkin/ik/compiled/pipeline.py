@@ -124,7 +124,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     plan = plan_at_tcp(plan, point)
     g, chain, limits = plan_parts(plan)
     clamp = tolerance * (1.0 + plan[PLAN.lever]) + plan[PLAN.deviation]
-    _family(plan, g, T_dh, seed, np.int64(0), clamp, q, valid, flags, near, why, scratch)
+    _family(plan, g, T_dh, seed, 0, clamp, q, valid, flags, near, why, scratch)
     wanted = 0
     for b in range(B):
         wanted |= near[b] & FREE
@@ -168,7 +168,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             # and this candidate's miss is real (polishing would carry it onto the partner's
             # member and hide the distinct flip, which the regular candidate then gives)
             position, rotation = _settle(plan, chain, T_at, candidate, fixed,
-                                         (seeded_near[b] & CLAMPED) != 0, np.bool_(False),
+                                         (seeded_near[b] & CLAMPED) != 0, False,
                                          tolerance, state, not raw_ok[b ^ 1])
             released[b] = not _any(fixed)
             if not released[b] and exact.within(position, rotation, tolerance) and not (
@@ -203,7 +203,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
             # is not singular here, and the regular candidate may reach another root of the
             # pose (kept as an extra; the seeded root, the one nearest the seed, stays)
             position, rotation = _settle_free(plan, chain, T_at, regular[b], candidate, fixed,
-                                              (near[b] & CLAMPED) != 0, np.bool_(False),
+                                              (near[b] & CLAMPED) != 0, False,
                                               tolerance, state)
             if exact.within(position, rotation, tolerance):
                 for j in range(n):
@@ -247,7 +247,7 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
                     position, rotation = _settle_free(plan, chain, T_at, regular[worse],
                                                       candidate, fixed,
                                                       (near[worse] & CLAMPED) != 0,
-                                                      np.bool_(False), tolerance, state)
+                                                      False, tolerance, state)
                     if (exact.within(position, rotation, tolerance)
                             and not _known(chain, q, ok, candidate)):
                         for j in range(n):

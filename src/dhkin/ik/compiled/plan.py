@@ -149,6 +149,15 @@ def _family(plan: NDArray[np.float64], g: NDArray[np.float64], T: NDArray[np.flo
 
 
 @jit
+def family_outputs(n: int) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.uint8],
+                                    NDArray[np.uint8], NDArray[np.float64]]:
+    """Fresh output arrays of one :func:`_family` call for n joints: q (B, n), valid, flags and
+    near (B,), why (WHY_SIZE,)."""
+    return (np.empty((BRANCHES, n)), np.empty(BRANCHES, np.bool_), np.empty(BRANCHES, np.uint8),
+            np.empty(BRANCHES, np.uint8), np.empty(WHY_SIZE))
+
+
+@jit
 def _finite(values: NDArray[np.float64]) -> bool:
     return bool(np.all(np.isfinite(values)))
 

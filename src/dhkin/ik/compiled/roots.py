@@ -16,11 +16,11 @@ from dhkin.ik.compiled.copies import wrap
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.plan import (
     PLAN,
-    WHY_SIZE,
     _family,
     _finite,
     _known,
     _seed_distance,
+    family_outputs,
     model_path,
 )
 
@@ -45,7 +45,7 @@ def _seed_root(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray
     root = seed.copy()
     fixed = np.zeros(n, np.bool_)
     position, rotation = exact.refine(chain, T, root, fixed, tolerance,
-                                      np.int64(4 * exact.MAX_STEPS), 1.0,
+                                      4 * exact.MAX_STEPS, 1.0,
                                       exact.SEED_DAMPING)
     if not exact.within(position, rotation, tolerance):
         return
@@ -168,11 +168,7 @@ def _retry_corrected(plan: NDArray[np.float64], g: NDArray[np.float64],
     B, n = q.shape
     ideal, _ = model_path(plan)
     corrected = np.empty((3, 4))
-    candidates = np.empty((B, n))
-    c_valid = np.empty(B, np.bool_)
-    c_flags = np.empty(B, np.uint8)
-    c_near = np.empty(B, np.uint8)
-    c_why = np.empty(WHY_SIZE)
+    candidates, c_valid, c_flags, c_near, c_why = family_outputs(n)
     fixed = np.zeros(n, np.bool_)
     state = np.empty(12)
     for b in range(B):
@@ -181,14 +177,14 @@ def _retry_corrected(plan: NDArray[np.float64], g: NDArray[np.float64],
         start = regular[b].copy()
         for _ in range(CORRECTIONS):
             _corrected_target(ideal, chain, start, T, corrected)
-            _family(plan, g, corrected, seed, np.int64(0), clamp, candidates, c_valid, c_flags,
+            _family(plan, g, corrected, seed, 0, clamp, candidates, c_valid, c_flags,
                     c_near, c_why, scratch)
             if not _finite(candidates[b]):
                 break
             for j in range(n):
                 start[j] = candidates[b, j]
             trial = start.copy()
-            exact.refine(chain, T_at, trial, fixed, tolerance, np.int64(4 * exact.MAX_STEPS),
+            exact.refine(chain, T_at, trial, fixed, tolerance, 4 * exact.MAX_STEPS,
                          exact.GROWTH, 0.0)
             position, rotation = exact.check(chain, trial, T_at, state)
             if exact.within(position, rotation, tolerance):

@@ -17,8 +17,8 @@ from dhkin.ik.compiled.plan import LONG_SHOT_BUDGET, PLAN, POLISH_BUDGET, _any, 
 @jit
 def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np.float64],
             values: NDArray[np.float64], fixed: NDArray[np.bool_], clamped: bool,
-            long_shot: bool | np.bool_, tolerance: float, state: NDArray[np.float64],
-            polish: bool | np.bool_ = True) -> tuple[float, float]:
+            long_shot: bool, tolerance: float, state: NDArray[np.float64],
+            polish: bool = True) -> tuple[float, float]:
     """Wrap a candidate's revolute values, refine it on the exact chain if the plan says so
     (joints marked ``fixed`` keep their value; a candidate that is an exact solution of the
     ideal model, not ``clamped``, is followed by continuation where Newton fails), or polish it
@@ -30,7 +30,7 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
             values[j] = wrap(values[j])
     if plan[PLAN.refine] != 0.0:
         start = values.copy()
-        budget = np.int64(LONG_SHOT_BUDGET if long_shot else 4 * exact.MAX_STEPS)
+        budget = LONG_SHOT_BUDGET if long_shot else 4 * exact.MAX_STEPS
         position, rotation = exact.refine(chain, T, values, fixed, tolerance, budget,
                                           exact.GROWTH, 0.0)
         if _any(fixed) and not exact.within(position, rotation, tolerance):
@@ -59,7 +59,7 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
                                       np.empty_like(chain))
         elif clamped and not exact.within(position, rotation, tolerance):
             # a target a hair beyond a fold: its least-squares point may verify
-            exact.refine(chain, T, values, fixed, tolerance, np.int64(POLISH_BUDGET), 1.0, 0.0)
+            exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET, 1.0, 0.0)
         for j in range(n):
             if chain[j, exact.JOINT.revolute] != 0.0:
                 values[j] = wrap(values[j])
@@ -69,7 +69,7 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
         # a clamped or near-singular candidate of an exact table: the closed form's point is
         # not the best one the chain reaches; Newton's is, and verification decides (a seeded
         # candidate keeps its seeded joints; see solve_branches for when it is polished)
-        exact.refine(chain, T, values, fixed, tolerance, np.int64(POLISH_BUDGET), exact.GROWTH,
+        exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET, exact.GROWTH,
                      0.0)
         position, rotation = exact.check(chain, values, T, state)
         if clamped and not exact.within(position, rotation, tolerance):
@@ -77,11 +77,11 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
             # oscillates along the fold's weak direction, a monotone descent reaches the
             # least-squares point, which may verify; a target a hair inside it: the roots lie a
             # hair off the fold
-            exact.refine(chain, T, values, fixed, tolerance, np.int64(POLISH_BUDGET), 1.0, 0.0)
+            exact.refine(chain, T, values, fixed, tolerance, POLISH_BUDGET, 1.0, 0.0)
             position, rotation = exact.check(chain, values, T, state)
             if not exact.within(position, rotation, tolerance):
                 position, rotation = continuation.off_fold(chain, T, values, fixed, tolerance,
-                                                           np.int64(POLISH_BUDGET))
+                                                           POLISH_BUDGET)
         for j in range(n):
             if chain[j, exact.JOINT.revolute] != 0.0:
                 values[j] = wrap(values[j])
@@ -92,11 +92,11 @@ def _settle(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np
 @jit
 def _settle_free(plan: NDArray[np.float64], chain: NDArray[np.float64], T: NDArray[np.float64],
                  start: NDArray[np.float64], candidate: NDArray[np.float64],
-                 fixed: NDArray[np.bool_], clamped: bool, long_shot: bool | np.bool_,
+                 fixed: NDArray[np.bool_], clamped: bool, long_shot: bool,
                  tolerance: float, state: NDArray[np.float64]) -> tuple[float, float]:
     """:func:`_settle` of ``start`` copied into ``candidate`` with every joint free."""
     for j in range(start.shape[0]):
         candidate[j] = start[j]
         fixed[j] = False
     return _settle(plan, chain, T, candidate, fixed, clamped, long_shot, tolerance, state,
-                   np.bool_(True))
+                   True)

@@ -5,9 +5,6 @@ motion (:mod:`.solver` documents the conventions). Every public name is importab
 
 from __future__ import annotations
 
-from dhkin.ik.numerical.descent import (
-    DescentMethods,
-)
 from dhkin.ik.numerical.entry import numerical_ik
 from dhkin.ik.numerical.settings import (
     DEFAULT_TOLERANCE,
@@ -36,7 +33,6 @@ __all__ = [
     "TWO_PI",
     "UNLIMITED",
     "Descent",
-    "DescentMethods",
     "Method",
     "Mode",
     "NumericalIK",

@@ -41,8 +41,27 @@ DEFAULT_CHUNK = 65536
 STREAM_BYTES = 64 * 2**20
 
 
+#: :func:`dhkin.ik.compiled.direct.direct_one`'s count for a pose it leaves to the pipeline.
+_DEFER = -2
+
+
 #: Singularity flag names of each bit mask.
 _FLAG_SETS: tuple[frozenset[str], ...] = tuple(flag_names(bits) for bits in range(8))
+
+
+def _compiled(kernel: Any, args: tuple[Any, ...], family: int | None) -> Callable[..., Any]:
+    """The compiled entry point of a numba kernel for the types of ``args`` (compiled, or loaded
+    from the cache, now); callers then pass exactly those types and skip numba's per-call type
+    resolution. ``family``: a family id the kernel takes first, as a compile-time constant (the
+    direct path's kernels then contain that family's solver alone)."""
+    from numba import typeof
+    from numba.core import types
+
+    signature = tuple(typeof(arg) for arg in args)
+    if family is not None:
+        signature = (types.literal(family), *signature)
+    kernel.compile(signature)
+    return kernel.overloads[signature].entry_point
 
 
 class ClosedFormSolver:
@@ -141,9 +160,11 @@ class ClosedFormSolver:
         except AttributeError:
             buffers = self._one_buffers()
         out_q, out_branch, out_flags, out_errors, why, info, fwork, bwork, uwork, iwork = buffers
-        count = self._one_kernel(self.plan, frames, target, seed, tolerance, bool(copies), out_q,
-                                 out_branch, out_flags, out_errors, why, info, fwork, bwork,
-                                 uwork, iwork)
+        arguments = (self.plan, frames, target, seed, tolerance, bool(copies), out_q, out_branch,
+                     out_flags, out_errors, why, info, fwork, bwork, uwork, iwork)
+        count = self._one_kernel(*arguments)
+        if count == _DEFER:
+            count = self._pipeline_kernel(*arguments)
         INFO = _kernels().INFO
         status = int(info[INFO.status])
         if status:
@@ -182,19 +203,48 @@ class ClosedFormSolver:
 
     @functools.cached_property
     def _one_kernel(self) -> Callable[..., int]:
-        """kernels.solve_one's compiled entry point for this solver's argument types (skips
-        numba's per-call type resolution of 16 arguments; callers pass exactly those types).
-        Compiles (or loads from the cache) by one call on the identity pose."""
-        kernel = _kernels().solve_one
-        args = (self.plan, self.frames, np.eye(4), self._zero_seed, DEFAULT_TOLERANCE, False,
-                *self._one_buffers())
-        kernel(*args)
-        try:
-            from numba import typeof
+        """The direct path's single-pose kernel for this table's family
+        (:func:`dhkin.ik.compiled.direct.direct_one`, the family bound in): see
+        :meth:`_entry_point`."""
+        from dhkin.ik.compiled import direct
 
-            return kernel.overloads[tuple(typeof(arg) for arg in args)].entry_point
-        except (AttributeError, KeyError, TypeError):  # another numba: the dispatcher
-            return kernel
+        kernel = self._entry_point(direct.direct_one, self._family_id)
+        family = self._family_id
+        return lambda *args: kernel(family, *args)
+
+    @functools.cached_property
+    def _pipeline_kernel(self) -> Callable[..., int]:
+        """The pipeline's single-pose kernel (:func:`dhkin.ik.compiled.pipeline.solve_one`), for
+        the poses the direct path leaves to it: compiled when a pose first needs it."""
+        return self._entry_point(_kernels().solve_one)
+
+    @functools.cached_property
+    def _family_id(self) -> int:
+        return int(self.plan[_kernels().PLAN.family])
+
+    def _entry_point(self, kernel: Any, family: int | None = None) -> Callable[..., int]:
+        """A single-pose kernel's compiled entry point for this solver's arguments (see
+        :func:`_compiled`); ``family``: the family id the direct path's kernels take first."""
+        args = (self.plan, self.frames, np.zeros((4, 4)), self._zero_seed, DEFAULT_TOLERANCE,
+                False, *self._one_buffers())
+        return _compiled(kernel, args, family)
+
+    @functools.cached_property
+    def _direct_batch(self) -> Callable[..., int]:
+        """The direct path's batch kernel for this table's family
+        (:func:`dhkin.ik.compiled.direct.direct_batch`, the family bound in)."""
+        from dhkin.ik.compiled import direct
+
+        kernels = _kernels()
+        B, n = self.n_branches, self.dof
+        args = (self.plan, self.frames, np.zeros((1, 4, 4)), np.zeros((1, n)), DEFAULT_TOLERANCE,
+                False, np.empty((1, B, n)), np.empty((1, B), np.bool_),
+                np.empty((1, B), np.uint8), np.empty((1, B, 2)), np.empty((1, B), np.int64),
+                np.empty((1, kernels.WHY_SIZE)), np.empty((1, kernels.INFO.size)),
+                np.empty(1, np.bool_))
+        kernel = _compiled(direct.direct_batch, args, self._family_id)
+        family = self._family_id
+        return lambda *args: kernel(family, *args)
 
     def _configuration(self, branch: int, turns: tuple[int, ...]) -> Configuration:
         """The (shared) Configuration of a branch and its turns."""
@@ -318,13 +368,31 @@ class ClosedFormSolver:
         why = np.empty((N, kernels.WHY_SIZE))
         info = np.empty((N, kernels.INFO.size))
 
-        def solve(a: int, b: int) -> None:
-            kernels.solve_batch(self.plan, frames, targets[a:b],
+        done = np.empty(N, np.bool_)
+
+        def solve_direct(a: int, b: int) -> None:
+            direct_batch(self.plan, frames, targets[a:b],
                                 seeds if seeds.shape[0] == 1 else seeds[a:b], tolerance, copies,
                                 q[a:b], ok[a:b], flags[a:b], errors[a:b], totals[a:b], why[a:b],
-                                info[a:b])
+                                info[a:b], done[a:b])
 
-        _in_slices(N, workers, solve)
+        direct_batch = self._direct_batch
+        _in_slices(N, workers, solve_direct)
+        rest = np.flatnonzero(~done)
+        if rest.size:  # the poses the direct path left to the pipeline
+            part = (seeds if seeds.shape[0] == 1 else seeds[rest], q[rest], ok[rest],
+                    flags[rest], errors[rest], totals[rest], why[rest], info[rest])
+            rest_targets = targets[rest]
+
+            def solve(a: int, b: int) -> None:
+                kernels.solve_batch(self.plan, frames, rest_targets[a:b],
+                                    part[0] if part[0].shape[0] == 1 else part[0][a:b],
+                                    tolerance, copies, *(array[a:b] for array in part[1:]))
+
+            _in_slices(rest.size, workers, solve)
+            for whole, answered in zip((q, ok, flags, errors, totals, why, info), part[1:],
+                                       strict=True):
+                whole[rest] = answered
         self._raise_rejected(targets, info, first_index)
         return q, ok, flags, errors, totals, info
 

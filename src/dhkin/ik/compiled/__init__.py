@@ -9,7 +9,8 @@ projection onto a rotation), :mod:`.spherical` and :mod:`.offset` (the family so
 ideal model, searches off a fold), :mod:`.pipeline` (one pose, start to end; batches are that
 function in a loop) and its steps: :mod:`.plan` (the solver's constants), :mod:`.settle` (one
 candidate refined and verified), :mod:`.members` (singular families), :mod:`.roots` (a refined
-table's extra roots), :mod:`.expand` (2pi copies of the answers).
+table's extra roots), :mod:`.expand` (2pi copies of the answers); :mod:`.direct` (the pipeline's
+answer for a regular pose, with a fraction of its code: tried first, and compiled without the rest).
 
 Cache guard: numba's on-disk cache (``cache=True``) checks only the source file of the function
 it compiled, so a kernel calling a helper from another module of this package would keep a stale

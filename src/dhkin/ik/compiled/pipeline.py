@@ -23,6 +23,10 @@ For a target T (4, 4), base_link -> TCP:
    such a copy, and every copy of a branch whose error is within :data:`COPY_MARGIN` of the
    tolerance, is verified again.
 
+The solver tries :mod:`.direct` first: for a regular pose of an exact-family table (no seeded
+candidate, every candidate verifies as computed, no two branches merge) it gives this pipeline's
+answer bit for bit with a fraction of its code, and declines every other pose.
+
 ``clamp``: reach conditions violated by at most tolerance x (1 + lever) + twice the model
 deviation (metres; no deviation for an exact-family table) are clamped onto their boundary,
 polished by Newton (from just off the fold where J is singular on it) and verified, not
@@ -63,6 +67,7 @@ from dhkin.ik.compiled.plan import (
     plan_at_tcp,
     plan_parts,
     verification_tolerance,
+    work_sizes,
 )
 from dhkin.ik.compiled.pose import STATUS_BAD_SEED, at_point, project, status, tcp_point, to_dh
 from dhkin.ik.compiled.roots import _merge_duplicates, _place_extras, _retry_corrected, _seed_root
@@ -280,13 +285,6 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
         elif unclamped[b] and not ok[b ^ 1]:
             info[INFO.dropped] += 1
     info[INFO.best_position], info[INFO.best_rotation] = best_position, best_rotation
-
-
-@jit
-def work_sizes(n: int) -> tuple[int, int, int, int]:
-    """Lengths of the float, bool, uint8 and int64 work arrays of one pose."""
-    floats = 67 + BRANCHES * n + n + WHY_SIZE
-    return floats, 3 * BRANCHES + n, 3 * BRANCHES, 3 * n
 
 
 @jit

@@ -86,6 +86,14 @@ WHY_SIZE = 6
 
 
 @jit
+def work_sizes(n: int) -> tuple[int, int, int, int]:
+    """Lengths of the float, bool, uint8 and int64 work arrays of one pose (the pipeline's
+    layout: :func:`.pipeline.solve_branches`)."""
+    floats = 67 + BRANCHES * n + n + WHY_SIZE
+    return floats, 3 * BRANCHES + n, 3 * BRANCHES, 3 * n
+
+
+@jit
 def verification_tolerance(plan: NDArray[np.float64], tolerance: float) -> float:
     """The tolerance the pipeline verifies at: ``tolerance`` less the FK rounding margin
     (:data:`FK_ROUNDING`)."""

@@ -1,0 +1,101 @@
+"""The direct path (dhkin.ik.compiled.direct) answers a regular pose exactly as the pipeline does.
+
+The solver tries the direct path first and hands the poses it declines to the pipeline. That is
+only sound if, on every pose it accepts, its answer is the pipeline's bit for bit: solutions,
+verification errors, flags, copy counts, the per-pose info and the numbers that explain an empty
+answer. Checked here on every closed-form robot, at q5 = 0, special angles, random poses, poses
+out of reach, poses rounded to six digits and with a TCP; and that it declines what it must (a
+refined table, a pose with a seeded candidate) while it takes every regular pose.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dhkin
+from dhkin.ik.compiled import pipeline
+from dhkin.transforms import rot_x
+from tests.test_ik_batch import ROBOTS, pose_set
+
+N_POSES = 4000
+
+
+def _outputs(solver, n_poses: int) -> tuple[np.ndarray, ...]:
+    B, n = solver.n_branches, solver.dof
+    return (np.zeros((n_poses, B, n)), np.zeros((n_poses, B), np.bool_),
+            np.zeros((n_poses, B), np.uint8), np.zeros((n_poses, B, 2)),
+            np.zeros((n_poses, B), np.int64), np.zeros((n_poses, pipeline.WHY_SIZE)),
+            np.zeros((n_poses, pipeline.INFO.size)))
+
+
+def both_paths(robot: dhkin.Robot, T: np.ndarray, seeds: np.ndarray, frames: np.ndarray,
+               copies: bool) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...], np.ndarray]:
+    """(pipeline outputs, direct outputs, which poses the direct path answered)."""
+    solver = robot.ik_solver
+    full, direct = _outputs(solver, len(T)), _outputs(solver, len(T))
+    done = np.zeros(len(T), np.bool_)
+    pipeline.solve_batch(solver.plan, frames, T, seeds, 1e-9, copies, *full)
+    solver._direct_batch(solver.plan, frames, T, seeds, 1e-9, copies, *direct, done)
+    return full, direct, done
+
+
+def assert_same_answers(full: tuple[np.ndarray, ...], direct: tuple[np.ndarray, ...],
+                        done: np.ndarray) -> None:
+    q, ok, flags, errors, totals, why, info = full
+    dq, dok, dflags, derrors, dtotals, dwhy, dinfo = direct
+    np.testing.assert_array_equal(dok[done], ok[done])
+    kept = ok & done[:, None]  # values of branches without a solution are not part of the answer
+    np.testing.assert_array_equal(dq[kept], q[kept])
+    np.testing.assert_array_equal(dflags[kept], flags[kept])
+    np.testing.assert_array_equal(derrors[kept], errors[kept])
+    np.testing.assert_array_equal(dtotals[done], totals[done])
+    np.testing.assert_array_equal(dwhy[done], why[done])  # NaN where unused, in both
+    np.testing.assert_array_equal(dinfo[done], info[done])
+
+
+@pytest.fixture(scope="module", params=ROBOTS, ids=lambda name: name.rsplit("/", 1)[-1])
+def robot(request, load_robot) -> dhkin.Robot:
+    return load_robot(request.param)
+
+
+@pytest.mark.parametrize("copies", [False, True])
+def test_direct_path_answers_as_the_pipeline_bit_for_bit(robot, copies):
+    T, seeds = pose_set(robot, N_POSES, seed=31)
+    rounded = np.round(T, 6)
+    rounded[:, 3] = [0.0, 0.0, 0.0, 1.0]
+    targets = np.ascontiguousarray(np.concatenate([T, rounded]))
+    for seed in (np.zeros((1, robot.dof)), np.concatenate([seeds, seeds])):
+        full, direct, done = both_paths(robot, targets, seed, robot.ik_solver.frames, copies)
+        assert_same_answers(full, direct, done)
+        # every random pose of general position takes the direct path (pose_set: a quarter at
+        # q5 = 0, a quarter at special angles, then random poses, the last five out of reach)
+        general = np.r_[N_POSES // 2:N_POSES - 5, N_POSES + N_POSES // 2:2 * N_POSES - 5]
+        assert done[general].all()
+        # and q5 = 0 never does: the wrist's free joint takes the seed's value (pipeline)
+        assert not done[:N_POSES // 4].any()
+
+
+def test_direct_path_with_a_tcp(load_robot):
+    robot = load_robot("ur5")
+    tcp = np.eye(4)
+    tcp[:3, 3] = [0.01, -0.02, 0.15]
+    tcp[:3, :3] = rot_x(0.3)[:3, :3]
+    q = robot.table.random_q(2000, np.random.default_rng(5))
+    T = np.ascontiguousarray(robot.fk(q) @ tcp)
+    full, direct, done = both_paths(robot, T, np.zeros((1, 6)), robot.ik_solver.frames_for(tcp),
+                                    False)
+    assert done.all()
+    assert_same_answers(full, direct, done)
+    solutions = robot.ik(T[0], tcp=tcp)
+    assert any(np.allclose(np.angle(np.exp(1j * (s - q[0]))), 0.0, atol=1e-6)
+               for s in solutions.q)
+
+
+def test_direct_path_declines_refined_tables(load_robot):
+    robot = load_robot("ur5e_calibrated")
+    assert robot.ik_solver.fit.refine
+    q = robot.table.random_q(200, np.random.default_rng(6))
+    T = np.ascontiguousarray(robot.fk(q))
+    _, _, done = both_paths(robot, T, np.zeros((1, 6)), robot.ik_solver.frames, False)
+    assert not done.any()

@@ -54,6 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import dhkin
+from dhkin.ik.compiled.direct import DEFER
 from dhkin.ik.workers import default_workers
 from dhkin.transforms import invert, pose_error
 
@@ -495,10 +496,15 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
     robot.ik(T[0])  # this thread's buffers
     buffers = solver._buffers.arrays
     sample = T[:2000]
-    entry_point = solver._one_kernel  # what robot.ik calls: no per-call type resolution
-    kernel_one = best_single(lambda pose: entry_point(
-        solver.plan, solver.frames, pose, solver._zero_seed, 1e-9, False, *buffers), sample,
-        runs)
+    # what robot.ik calls: the direct path's kernel, then the pipeline's for a pose it declines
+    direct_one, pipeline_one = solver._one_kernel, solver._pipeline_kernel
+
+    def kernels_one(pose: np.ndarray) -> None:
+        arguments = (solver.plan, solver.frames, pose, solver._zero_seed, 1e-9, False, *buffers)
+        if direct_one(*arguments) == DEFER:
+            pipeline_one(*arguments)
+
+    kernel_one = best_single(kernels_one, sample, runs)
     whole_one = best_single(lambda pose: robot.ik(pose, copies=False), sample, runs)
     return [(f"every branch's verified solution: direct path (kernel; it answers {taken:.1f} % "
              f"of the poses)", direct),
@@ -506,7 +512,7 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
             ("in-limit copy nearest the seed, packing (kernel)", expand),
             ("ik_batch minus its kernels (Python, allocation)", batch - branches - expand),
             ("ik_batch(copies=False), total", batch),
-            ("single pose: kernel call (with argument passing)", kernel_one),
+            ("single pose: kernel calls (with argument passing)", kernel_one),
             ("single pose: Python around it (result object)", whole_one - kernel_one),
             ("single pose: ik(copies=False), total", whole_one)]
 

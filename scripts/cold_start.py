@@ -1,5 +1,5 @@
-"""Cold start: the first ``robot.ik`` and the first ``robot.ik_batch`` of a process, in seconds; then
-the first pose the direct path declines (a wrist-singular one, q5 = 0), which compiles the
+"""Cold start: the first ``robot.ik`` and the first ``robot.ik_batch`` of a process, in seconds;
+then the first pose the direct path declines (a wrist-singular one, q5 = 0), which compiles the
 pipeline (dhkin.ik.compiled.direct). ``python scripts/cold_start.py [ROBOT]`` (default ur5).
 
 Run it in a fresh install (``python3 -m venv v && . v/bin/activate && pip install . && python

@@ -369,29 +369,28 @@ class ClosedFormSolver:
         info = np.empty((N, kernels.INFO.size))
 
         done = np.empty(N, np.bool_)
+        outputs: tuple[NDArray[Any], ...] = (q, ok, flags, errors, totals, why, info)
+        direct_batch = self._direct_batch
 
         def solve_direct(a: int, b: int) -> None:
             direct_batch(self.plan, frames, targets[a:b],
-                                seeds if seeds.shape[0] == 1 else seeds[a:b], tolerance, copies,
-                                q[a:b], ok[a:b], flags[a:b], errors[a:b], totals[a:b], why[a:b],
-                                info[a:b], done[a:b])
+                         seeds if seeds.shape[0] == 1 else seeds[a:b], tolerance, copies,
+                         *(array[a:b] for array in outputs), done[a:b])
 
-        direct_batch = self._direct_batch
         _in_slices(N, workers, solve_direct)
         rest = np.flatnonzero(~done)
-        if rest.size:  # the poses the direct path left to the pipeline
-            part = (seeds if seeds.shape[0] == 1 else seeds[rest], q[rest], ok[rest],
-                    flags[rest], errors[rest], totals[rest], why[rest], info[rest])
+        if rest.size:  # the poses the direct path declined: the pipeline answers them
             rest_targets = targets[rest]
+            rest_seeds = seeds if seeds.shape[0] == 1 else seeds[rest]
+            answers = tuple(array[rest] for array in outputs)
 
             def solve(a: int, b: int) -> None:
                 kernels.solve_batch(self.plan, frames, rest_targets[a:b],
-                                    part[0] if part[0].shape[0] == 1 else part[0][a:b],
-                                    tolerance, copies, *(array[a:b] for array in part[1:]))
+                                    rest_seeds if rest_seeds.shape[0] == 1 else rest_seeds[a:b],
+                                    tolerance, copies, *(array[a:b] for array in answers))
 
             _in_slices(rest.size, workers, solve)
-            for whole, answered in zip((q, ok, flags, errors, totals, why, info), part[1:],
-                                       strict=True):
+            for whole, answered in zip(outputs, answers, strict=True):
                 whole[rest] = answered
         self._raise_rejected(targets, info, first_index)
         return q, ok, flags, errors, totals, info

@@ -38,16 +38,17 @@ from dhkin.ik.compiled.plan import (
     INFO,
     OFFSET_WRIST,
     PLAN,
+    POSE_WORK,
     SPHERICAL_WRIST,
     STANFORD,
     _same,
     _value_flags,
-    plan_at_tcp,
+    begin_pose,
     plan_parts,
+    pose_views,
     verification_tolerance,
     work_sizes,
 )
-from dhkin.ik.compiled.pose import STATUS_BAD_SEED, at_point, project, status, tcp_point, to_dh
 from dhkin.ik.compiled.spherical import solve_spherical_wrist, solve_stanford
 
 #: :func:`direct_one`'s count for a pose the direct path leaves to the pipeline.
@@ -102,36 +103,13 @@ def direct_branches(kind: int, plan: NDArray[np.float64], frames: NDArray[np.flo
     n = seed.shape[0]
     B = BRANCHES
     tolerance = verification_tolerance(plan, tolerance)
-    for k in range(INFO.size):
-        info[k] = 0.0
-    for k in range(why.shape[0]):
-        why[k] = math.nan
-    for b in range(B):
-        ok[b] = False
-        flags[b] = 0
-    st = status(T)
-    if st != 0:
-        info[INFO.status] = st
-        return True
-    for j in range(n):
-        if not math.isfinite(seed[j]):
-            info[INFO.status] = STATUS_BAD_SEED
-            return True
-    # views into the work arrays (sizes: plan.work_sizes)
-    projected = fwork[0:12].reshape(3, 4)
-    T_dh = fwork[12:24].reshape(3, 4)
-    T_at = fwork[24:36].reshape(3, 4)
-    point = fwork[36:39]
-    state = fwork[39:51]
-    scratch = fwork[51:67]
-    candidate = fwork[67:67 + n]
+    usable, plan = begin_pose(plan, frames, T, seed, ok, flags, why, info, fwork)
+    if not usable:
+        return True  # rejected: info[INFO.status] says why, as the pipeline's would
+    _, T_dh, T_at, _, state, scratch = pose_views(fwork)
+    candidate = fwork[POSE_WORK:POSE_WORK + n]
     valid = bwork[:B]
     near = uwork[:B]
-    info[INFO.projection] = project(T, projected)
-    to_dh(frames, projected, T_dh)
-    tcp_point(frames, point)
-    at_point(T_dh, point, T_at)
-    plan = plan_at_tcp(plan, point)
     g, chain, _ = plan_parts(plan)
     clamp = tolerance * (1.0 + plan[PLAN.lever]) + plan[PLAN.deviation]
     solve_family(kind, plan, g, T_dh, seed, clamp, q, valid, flags, near, why, scratch)

@@ -53,6 +53,7 @@ from dhkin.ik.compiled.plan import (
     INFO,
     OFFSET_WRIST,
     PLAN,
+    POSE_WORK,
     SPHERICAL_WRIST,
     STANFORD,
     WHY_SIZE,
@@ -64,12 +65,13 @@ from dhkin.ik.compiled.plan import (
     _same,
     _size,
     _value_flags,
+    begin_pose,
     plan_at_tcp,
     plan_parts,
+    pose_views,
     verification_tolerance,
     work_sizes,
 )
-from dhkin.ik.compiled.pose import STATUS_BAD_SEED, at_point, project, status, tcp_point, to_dh
 from dhkin.ik.compiled.roots import _merge_duplicates, _place_extras, _retry_corrected, _seed_root
 from dhkin.ik.compiled.settle import _settle, _settle_free
 
@@ -87,34 +89,11 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     n = seed.shape[0]
     B = BRANCHES
     tolerance = verification_tolerance(plan, tolerance)
-    for k in range(INFO.size):
-        info[k] = 0.0
-    for k in range(why.shape[0]):
-        why[k] = math.nan
-    for b in range(B):
-        ok[b] = False
-        flags[b] = 0
-    st = status(T)
-    if st != 0:
-        info[INFO.status] = st
+    usable, plan = begin_pose(plan, frames, T, seed, ok, flags, why, info, fwork)
+    if not usable:
         return
-    for j in range(n):
-        if not math.isfinite(seed[j]):
-            info[INFO.status] = STATUS_BAD_SEED
-            return
-    at = 0
-    projected = fwork[at:at + 12].reshape(3, 4)
-    at += 12
-    T_dh = fwork[at:at + 12].reshape(3, 4)
-    at += 12
-    T_at = fwork[at:at + 12].reshape(3, 4)  # the target of the TCP point (see plan_at_tcp)
-    at += 12
-    point = fwork[at:at + 3]
-    at += 3
-    state = fwork[at:at + 12]
-    at += 12
-    scratch = fwork[at:at + 16]
-    at += 16
+    _, T_dh, T_at, _, state, scratch = pose_views(fwork)
+    at = POSE_WORK
     seeded_q = fwork[at:at + B * n].reshape(B, n)
     at += B * n
     candidate = fwork[at:at + n]
@@ -122,11 +101,6 @@ def solve_branches(plan: NDArray[np.float64], frames: NDArray[np.float64],
     seeded_why = fwork[at:at + WHY_SIZE]
     valid, seeded_valid, fixed = bwork[:B], bwork[B:2 * B], bwork[2 * B:2 * B + n]
     near, seeded_flags, seeded_near = uwork[:B], uwork[B:2 * B], uwork[2 * B:3 * B]
-    info[INFO.projection] = project(T, projected)
-    to_dh(frames, projected, T_dh)
-    tcp_point(frames, point)
-    at_point(T_dh, point, T_at)
-    plan = plan_at_tcp(plan, point)
     g, chain, limits = plan_parts(plan)
     clamp = tolerance * (1.0 + plan[PLAN.lever]) + plan[PLAN.deviation]
     _family(plan, g, T_dh, seed, 0, clamp, q, valid, flags, near, why, scratch)

@@ -17,6 +17,7 @@ from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.layout import layout
 from dhkin.ik.compiled.offset import GEOMETRY as OG
 from dhkin.ik.compiled.offset import solve_offset_wrist
+from dhkin.ik.compiled.pose import STATUS_BAD_SEED, at_point, project, status, tcp_point, to_dh
 from dhkin.ik.compiled.spherical import GEOMETRY as SG
 from dhkin.ik.compiled.spherical import solve_spherical_wrist, solve_stanford
 
@@ -89,8 +90,55 @@ WHY_SIZE = 6
 def work_sizes(n: int) -> tuple[int, int, int, int]:
     """Lengths of the float, bool, uint8 and int64 work arrays of one pose (the pipeline's
     layout: :func:`.pipeline.solve_branches`)."""
-    floats = 67 + BRANCHES * n + n + WHY_SIZE
+    floats = POSE_WORK + BRANCHES * n + n + WHY_SIZE
     return floats, 3 * BRANCHES + n, 3 * BRANCHES, 3 * n
+
+
+#: Length of the work floats :func:`pose_views` lays out (the pipeline's own follow them).
+POSE_WORK = 67
+
+
+@jit
+def pose_views(fwork: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                     NDArray[np.float64], NDArray[np.float64],
+                                                     NDArray[np.float64], NDArray[np.float64]]:
+    """Views into a pose's float work array: the projected target (3, 4), the target in DH
+    frame 0 -> n (3, 4), the target of the TCP point (3, 4; see plan_at_tcp), the TCP point
+    (3,), an FK state (12,) and the family solver's scratch (16,)."""
+    return (fwork[0:12].reshape(3, 4), fwork[12:24].reshape(3, 4), fwork[24:36].reshape(3, 4),
+            fwork[36:39], fwork[39:51], fwork[51:POSE_WORK])
+
+
+@jit
+def begin_pose(plan: NDArray[np.float64], frames: NDArray[np.float64], T: NDArray[np.float64],
+               seed: NDArray[np.float64], ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+               why: NDArray[np.float64], info: NDArray[np.float64],
+               fwork: NDArray[np.float64]) -> tuple[bool, NDArray[np.float64]]:
+    """Step 1 of one pose, shared by the pipeline and the direct path: the outputs reset (info
+    zero, why NaN, no branch ok), the pose and the seed checked (a rejection goes to
+    info[INFO.status]), the rotation projected (info[INFO.projection]) and the targets of
+    :func:`pose_views` computed. Returns (whether the pose is usable, the plan at its TCP)."""
+    for k in range(INFO.size):
+        info[k] = 0.0
+    for k in range(why.shape[0]):
+        why[k] = math.nan
+    for b in range(ok.shape[0]):
+        ok[b] = False
+        flags[b] = 0
+    st = status(T)
+    if st != 0:
+        info[INFO.status] = st
+        return False, plan
+    for j in range(seed.shape[0]):
+        if not math.isfinite(seed[j]):
+            info[INFO.status] = STATUS_BAD_SEED
+            return False, plan
+    projected, T_dh, T_at, point, _, _ = pose_views(fwork)
+    info[INFO.projection] = project(T, projected)
+    to_dh(frames, projected, T_dh)
+    tcp_point(frames, point)
+    at_point(T_dh, point, T_at)
+    return True, plan_at_tcp(plan, point)
 
 
 @jit

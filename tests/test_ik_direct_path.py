@@ -17,6 +17,7 @@ import dhkin
 from dhkin.ik.compiled import pipeline
 from dhkin.transforms import rot_x
 from tests.test_ik_batch import ROBOTS, pose_set
+from tests.test_ik_vendor_poses import EXACT_TABLES, shoulder_singular_q, special_q, vendor
 
 N_POSES = 4000
 
@@ -99,3 +100,28 @@ def test_direct_path_declines_refined_tables(load_robot):
     T = np.ascontiguousarray(robot.fk(q))
     _, _, done = both_paths(robot, T, np.zeros((1, 6)), robot.ik_solver.frames, False)
     assert not done.any()
+
+
+@pytest.mark.parametrize("name", EXACT_TABLES)
+def test_direct_path_on_vendor_poses(name):
+    """Targets by Pinocchio on the vendor URDF (../shared/reference), not our FK: random, q5 = 0,
+    |q5| in [1e-12, 1e-6], special angles and shoulder-singular poses, without a seed and seeded
+    with the sampled q moved by 0.05 rad: the direct path answers as the pipeline does; the
+    vendor's rounded constants (UR: pi/2 as 1.570796327) leave random poses regular."""
+    robot = dhkin.load(name)
+    reference = vendor(name)
+    rng = np.random.default_rng(41)
+    random = robot.table.random_q(2000, rng)
+    wrist = robot.table.random_q(1000, rng)
+    wrist[:500, 4] = 0.0
+    wrist[500:, 4] = np.exp(rng.uniform(np.log(1e-12), np.log(1e-6), 500)) \
+        * rng.choice([-1.0, 1.0], 500)
+    q = np.concatenate([random, wrist, special_q(robot, 500, rng),
+                        shoulder_singular_q(robot, 50, rng)])
+    T = np.ascontiguousarray(reference.fk(q))
+    seeds = q + rng.normal(0.0, 0.05, q.shape)
+    for seed in (np.zeros((1, robot.dof)), seeds):
+        full, direct, done = both_paths(robot, T, seed, robot.ik_solver.frames, False)
+        assert_same_answers(full, direct, done)
+        assert done[:2000].all()
+        assert not done[2000:2500].any()  # q5 = 0: the seed's wrist split, by the pipeline

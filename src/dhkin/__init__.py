@@ -18,6 +18,7 @@ from dhkin.errors import (
     ValidationInputError,
 )
 from dhkin.fit import fit_corrections
+from dhkin.importer import ImportResult, import_description
 from dhkin.robot import Robot, builtin_names, load
 from dhkin.table_file import load_table, parse_table, table_to_yaml, write_table
 
@@ -27,6 +28,7 @@ __all__ = [
     "DhkinError",
     "FamilyError",
     "IKInputError",
+    "ImportResult",
     "InputError",
     "Joint",
     "Robot",
@@ -37,6 +39,7 @@ __all__ = [
     "ValidationInputError",
     "builtin_names",
     "fit_corrections",
+    "import_description",
     "load",
     "load_table",
     "parse_table",

@@ -65,6 +65,49 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return EXIT_OK if report.ok else EXIT_FAILED
 
 
+def cmd_import(args: argparse.Namespace) -> int:
+    from dhkin.importer import import_description
+
+    output = Path(args.output)
+    if output.suffix not in (".yaml", ".yml"):
+        raise InputError(f"-o {output}: expected a .yaml table file name", field="output",
+                         value=str(output), expected="a path ending in .yaml")
+    if output.exists() and not args.force:
+        raise InputError(f"-o {output}: the file exists; expected a new file name, or --force "
+                         "to replace it", field="output", value=str(output),
+                         expected="a file that does not exist (or --force)")
+    if not output.parent.is_dir():
+        raise InputError(f"-o {output}: no folder {output.parent}; expected an existing folder",
+                         field="output", value=str(output), expected="an existing folder")
+    result = import_description(args.description, base=args.base, tip=args.tip,
+                                convention=args.convention,
+                                units={"length": args.length, "angle": args.angle},
+                                xacro_args=_xacro_arguments(args.xacro_arg), name=args.name)
+    partial = output.with_name(f".{output.name}.partial")
+    try:
+        partial.write_text(result.yaml(), encoding="utf-8")
+        partial.replace(output)
+    except OSError as exc:
+        partial.unlink(missing_ok=True)
+        raise InputError(f"-o {output}: cannot write the table ({exc.strerror})",
+                         field="output", value=str(output), expected="a writable file") from exc
+    print(result.summary())
+    print(f"wrote {output}")
+    return EXIT_OK
+
+
+def _xacro_arguments(values: Sequence[str] | None) -> dict[str, str]:
+    """``NAME:=VALUE`` strings -> {NAME: VALUE} (InputError naming a malformed one)."""
+    arguments = {}
+    for value in values or ():
+        name, separator, text = value.partition(":=")
+        if not separator or not name:
+            raise InputError(f"--xacro-arg {value!r}: expected NAME:=VALUE", field="xacro-arg",
+                             value=value, expected="NAME:=VALUE")
+        arguments[name] = text
+    return arguments
+
+
 def _angles(values: Sequence[float], degrees: bool) -> np.ndarray:
     array = np.asarray(values, dtype=float)
     return np.radians(array) if degrees else array
@@ -311,6 +354,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
     p.set_defaults(run=cmd_compare)
+
+    p = sub.add_parser("import", help="import a URDF or xacro description as a DH table")
+    p.add_argument("description", help="the URDF or xacro file")
+    p.add_argument("-o", "--output", required=True, help="the table file to write (.yaml)")
+    p.add_argument("--base", help="base link of the chain (default: the root link)")
+    p.add_argument("--tip", help="tip link of the chain (default: the single leaf link)")
+    p.add_argument("--convention", choices=("standard", "modified"), default="standard",
+                   help="DH convention (default standard)")
+    p.add_argument("--length", choices=("m", "mm"), default="m", help="length unit (default m)")
+    p.add_argument("--angle", choices=("deg", "rad"), default="deg",
+                   help="angle unit (default deg)")
+    p.add_argument("--xacro-arg", action="append", metavar="NAME:=VALUE",
+                   help="a xacro argument (repeatable)")
+    p.add_argument("--name", help="the table's robot name (default: the file name's stem)")
+    p.add_argument("--force", action="store_true", help="replace an existing output file")
+    p.set_defaults(run=cmd_import)
 
     p = sub.add_parser("fk", help="forward kinematics base_link -> tool0 (or --frame)")
     _robot_arg(p)

@@ -321,9 +321,10 @@ def table_to_yaml(table: DHTable, units: Mapping[str, str] | None = None,
     ``units`` = ``{"length": "m" | "mm", "angle": "rad" | "deg"}`` (default m and rad). In m/rad
     every joint value, limit and correction is written as ``repr(float)`` and read back bit for
     bit; base, tool and flange are written as xyz + rpy, whose matrices are rebuilt to ~1e-16,
-    so the FK of the table read back equals the original's to ~1e-15. Other units scale each
-    number (exact to ~1 ulp). Corrections are written only for joints that have one; base, tool
-    and flange always. ``header`` (optional) is written first as ``#`` comment lines.
+    so the FK of the table read back equals the original's to ~1e-15. Other units write each
+    number as the shortest decimal read back bit for bit where one exists (90 for pi/2 rad),
+    else the nearest (exact to ~1 ulp). Corrections are written only for joints that have one;
+    base, tool and flange always. ``header`` (optional) is written first as ``#`` comment lines.
     """
     units = dict(EXACT_UNITS if units is None else units)
     if set(units) != {"length", "angle"} or units["length"] not in LENGTH_UNITS \
@@ -333,10 +334,10 @@ def table_to_yaml(table: DHTable, units: Mapping[str, str] | None = None,
     angle_scale = ANGLE_UNITS[units["angle"]]
 
     def length(value: float) -> str:
-        return _yaml_number(value / length_scale if length_scale != 1.0 else value)
+        return _scaled_number(value, length_scale)
 
     def angle(value: float) -> str:
-        return _yaml_number(math.degrees(value) if angle_scale != 1.0 else value)
+        return _scaled_number(value, angle_scale)
 
     def vector(values: Sequence[float] | NDArray[np.float64], fmt: Any) -> str:
         return "[" + ", ".join(fmt(float(v)) for v in values) + "]"
@@ -396,6 +397,20 @@ def _yaml_number(value: float) -> str:
         mantissa, exponent = text.split("e")
         text = f"{mantissa}.0e{exponent}"
     return text
+
+
+def _scaled_number(value: float, scale: float) -> str:
+    """``value`` (SI) in a unit of ``scale`` SI per unit, as YAML: the shortest decimal that
+    :func:`load_table` (which multiplies by ``scale``) reads back as ``value`` bit for bit, else
+    the nearest one (exact to ~1 ulp)."""
+    if scale == 1.0:
+        return _yaml_number(value)
+    in_unit = value / scale
+    for digits in range(18):
+        candidate = round(in_unit, digits)
+        if candidate * scale == value:
+            return _yaml_number(candidate)
+    return _yaml_number(in_unit)
 
 
 def _yaml_plain(text: str) -> str:

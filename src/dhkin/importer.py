@@ -1,0 +1,496 @@
+"""Import a URDF or xacro description as a DH table (``dhkin import``).
+
+The table keeps the description's zero pose, joint names, child link names, limits, velocities
+and efforts, and its FK (base_link -> tool0) equals the description's ``base -> tip`` for every
+q. How the rows are found, in either convention (DESIGN.md, "The DH table file"):
+
+1. **Axes.** Pinocchio reads the chain at q = 0 (:func:`dhkin.fit.read_chain`, fixed joints
+   folded in): each joint's axis as a line (point, unit direction u_i) in the base frame. The
+   table's z_i = direction_i * u_i, with direction_i = +1 except where the axis runs opposite
+   to the previous one (or, for joint 1, points down the base's z): there -1, so that parallel
+   axes share one z and q keeps the URDF's positive sense either way.
+2. **Common normals.** Between consecutive axes k, k + 1: the common normal (skew or
+   intersecting axes), or, for parallel axes, the normal from the previous normal's foot (so
+   d_k = 0). Its x direction is the sign of the normal nearest the previous x (offsets only
+   where needed; a ties towards a >= 0). Before axis 1: the foot nearest the base origin, x
+   along the base's x (so base is the identity when axis 1 is the base's z through its
+   origin). After axis n: the foot nearest the tip's origin, x as before (offset_n = 0).
+3. **Rows.** theta (offset) and d of joint i are the angle and distance about and along axis i
+   from the normal before it to the normal after it; a and alpha are the length and twist of
+   the normal after axis i (standard) or before it (modified). base = base -> DH frame 0,
+   tool = DH frame n -> tip; both frames are the same in the two conventions.
+4. **Parallel within the band.** Axes whose angle is within :data:`dhkin.ik.family.BAND`
+   (0.02 rad) of parallel but not parallel to :data:`PARALLEL_NOISE` have no usable exact DH
+   row (the common normal runs off by their offset / the angle: metres or kilometres). Such a
+   table is written as the nominal table (those axes parallel; the closed-form family's ideal
+   model when one fits within the band) plus per-joint ``correction`` transforms fitted by
+   :func:`dhkin.fit.fit_corrections`: corrections appear only where no exact DH exists.
+5. **Datasheet numbers.** Every DH value, base and tool component is written as the shortest
+   decimal (in the table's units) within :data:`CLEAN` of the exact value; limits, velocities
+   and efforts are copied as they are. The written table, read back, is checked against the
+   description on :data:`VERIFY_SAMPLES` random joint vectors: at most DEFAULT_TOLERANCE.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from dhkin.description import CONTINUOUS_LIMIT, UNSUPPORTED_TYPES, Description, read_description
+from dhkin.dh import DHTable, Joint
+from dhkin.errors import DHError, FamilyError, InputError, URDFError
+from dhkin.fit import URDFChain, fit_corrections, read_chain
+from dhkin.table_file import ANGLE_UNITS, LENGTH_UNITS, exact_rpy, parse_table, table_to_yaml
+from dhkin.tolerances import DEFAULT_TOLERANCE
+from dhkin.transforms import invert, pose_error, rot_y, xyz_rpy_to_matrix
+
+#: Rounding that is not a difference (m and rad): a thousandth of the tolerance. Written
+#: numbers are the shortest decimals this close to the exact values; axes whose sine times the
+#: arm's size stays below it are parallel.
+CLEAN = DEFAULT_TOLERANCE * 1e-3
+#: Random joint vectors (plus q = 0) on which the written table is checked (fixed seed 0).
+VERIFY_SAMPLES = 1000
+#: tool0 -> flange when the description has no ``flange`` link: ROS-Industrial's flange has its x
+#: axis along tool0's z.
+TOOL0_TO_FLANGE = rot_y(-math.pi / 2)
+
+CONVENTIONS = ("standard", "modified")
+
+
+@dataclass(frozen=True)
+class ImportResult:
+    """An imported table and what was found on the way.
+
+    ``deviation``: largest (position m, rotation rad) difference between the written table and
+    the description over ``samples`` joint vectors. ``family``: the closed-form family that fits
+    (None: none; ``family_reason`` says why). ``ignored``: joints of the description the table
+    does not hold (off the chain, mimic joints). ``notes``: what the import decided, also
+    written into the table's ``source``.
+    """
+
+    table: DHTable
+    units: Mapping[str, str]
+    deviation: tuple[float, float]
+    samples: int
+    family: str | None
+    family_reason: str
+    refined: bool
+    ignored: tuple[str, ...]
+    notes: tuple[str, ...]
+
+    def yaml(self) -> str:
+        """The table file's text (in ``units``), headed by the import summary."""
+        return table_to_yaml(self.table, self.units, header=self.summary())
+
+    def summary(self) -> str:
+        family = (f"{self.family}" + (" (refined on the exact chain)" if self.refined else "")
+                  if self.family else f"none ({self.family_reason})")
+        lines = [f"{self.table.name}: {self.table.dof} joints, {self.table.convention} DH"
+                 + (", with corrections" if self.table.corrected else ""),
+                 f"closed-form family: {family}",
+                 f"FK deviation from the description over {self.samples} joint vectors: "
+                 f"{self.deviation[0]:.3e} m, {self.deviation[1]:.3e} rad "
+                 f"(tolerance {DEFAULT_TOLERANCE:.0e})"]
+        if self.ignored:
+            lines.append("ignored: " + "; ".join(self.ignored))
+        return "\n".join(lines)
+
+
+@dataclass
+class _Normal:
+    """The common normal from axis k to axis k + 1: its feet on both axes, unit x, length a
+    (along x) and twist alpha (z_k -> z_{k+1} about x)."""
+
+    start: NDArray[np.float64]
+    end: NDArray[np.float64]
+    x: NDArray[np.float64]
+    a: float
+    alpha: float
+
+
+def import_description(path: str | Path, base: str | None = None, tip: str | None = None,
+                       convention: str = "standard", units: Mapping[str, str] | None = None,
+                       xacro_args: Mapping[str, str] | None = None, name: str | None = None
+                       ) -> ImportResult:
+    """Import the chain ``base`` -> ``tip`` of a URDF or xacro file as a DH table.
+
+    ``base`` defaults to the root link, ``tip`` to the single leaf (URDFError listing the leaves
+    when there are several). ``units``: the table file's {"length": "m"|"mm", "angle":
+    "deg"|"rad"} (default m and deg). Raises URDFError for a description that cannot be read or
+    has a floating, planar or mimic joint on the chain, and DHError when the written table would
+    deviate from the description by more than DEFAULT_TOLERANCE (a bug: the construction is
+    exact).
+    """
+    if convention not in CONVENTIONS:
+        raise InputError(f"convention: expected one of {list(CONVENTIONS)}, got {convention!r}",
+                         field="convention", value=convention, expected=f"one of {CONVENTIONS}")
+    units = _check_units(units)
+    description = read_description(path, xacro_args)
+    base = description.root if base is None else base
+    tip = _default_tip(description) if tip is None else tip
+    joints, ignored = _chain_joints(description, base, tip)
+    chain = read_chain(description.text, base, tip)
+    chain = replace(chain, source=description.source)
+    if list(chain.joint_names) != [joint.name for joint in joints]:  # Pinocchio and yourdfpy
+        raise URDFError(f"{description.source}: Pinocchio reads the chain {base} -> {tip} as "
+                        f"{list(chain.joint_names)}, yourdfpy as {[j.name for j in joints]}; "
+                        "expected the same joints")
+    notes = []
+    continuous = [joint.name for joint in joints if joint.type == "continuous"]
+    if continuous:
+        notes.append(f"continuous joints {continuous} limited to +-360 deg")
+    rows = _rows_from_axes(chain, convention, units)
+    table = _table(description, chain, joints, rows, convention, name, base, tip)
+    if rows.near_parallel:
+        pairs = ", ".join(f"{k + 1}-{k + 2}" for k in rows.near_parallel)
+        notes.append(f"axes {pairs} are within the band of parallel but not parallel: nominal "
+                     "DH rows with fitted corrections")
+        table = _corrected(table, description.text, base, tip)
+    table = _clean(table, units)
+    table = replace(table, source=_source(description, base, tip, notes))
+    written = parse_table(yaml.safe_load(table_to_yaml(table, units)),
+                          source=description.source)
+    deviation = _deviation(written, chain)
+    if max(deviation) > DEFAULT_TOLERANCE:
+        raise DHError(f"{description.source}: the imported table deviates from the description "
+                      f"by {deviation[0]:.3e} m / {deviation[1]:.3e} rad over {VERIFY_SAMPLES} "
+                      f"joint vectors; expected at most {DEFAULT_TOLERANCE:.0e}",
+                      field="table", value=max(deviation),
+                      expected=f"at most {DEFAULT_TOLERANCE:.0e}")
+    family, reason, refined = _family(written)
+    return ImportResult(table=written, units=units, deviation=deviation,
+                        samples=VERIFY_SAMPLES + 1, family=family, family_reason=reason,
+                        refined=refined, ignored=tuple(ignored), notes=tuple(notes))
+
+
+# --------------------------------------------------------------------------------------------
+# The chain
+
+
+def _check_units(units: Mapping[str, str] | None) -> dict[str, str]:
+    chosen = {"length": "m", "angle": "deg"} if units is None else dict(units)
+    if set(chosen) != {"length", "angle"} or chosen["length"] not in LENGTH_UNITS \
+            or chosen["angle"] not in ANGLE_UNITS:
+        raise InputError(f"units: expected {{'length': one of {list(LENGTH_UNITS)}, 'angle': one "
+                         f"of {list(ANGLE_UNITS)}}}, got {dict(chosen)!r}", field="units",
+                         value=dict(chosen), expected="length m|mm, angle deg|rad")
+    return chosen
+
+
+def _default_tip(description: Description) -> str:
+    leaves = description.leaves()
+    if len(leaves) != 1:
+        raise URDFError(f"{description.source}: several leaf links {leaves}; expected --tip "
+                        "naming one of them", field="tip", value=None,
+                        expected=f"one of {leaves}")
+    return leaves[0]
+
+
+def _chain_joints(description: Description, base: str, tip: str
+                  ) -> tuple[list, list[str]]:
+    """The actuated joints on the path base -> tip, and the description's joints left out
+    (with why). URDFError for a floating, planar or mimic joint on the path."""
+    path = description.path(base, tip)
+    for joint in path:
+        if joint.type in UNSUPPORTED_TYPES:
+            raise URDFError(f"{description.source}: joint {joint.name!r} on the chain {base} -> "
+                            f"{tip} is {joint.type}; expected revolute, continuous, prismatic "
+                            "or fixed joints", field="joint", value=joint.name,
+                            expected="revolute, continuous, prismatic or fixed")
+        if joint.mimic is not None:
+            raise URDFError(f"{description.source}: joint {joint.name!r} on the chain {base} -> "
+                            f"{tip} mimics {joint.mimic!r}; a DH row needs its own joint value: "
+                            "expected no mimic joint on the chain", field="joint",
+                            value=joint.name, expected="no mimic joint on the chain")
+    actuated = [joint for joint in path if joint.actuated]
+    if not actuated:
+        raise URDFError(f"{description.source}: the chain {base} -> {tip} has no moving joint; "
+                        "expected at least one revolute, continuous or prismatic joint")
+    on_path = {joint.name for joint in path}
+    ignored = []
+    for joint in description.joints:
+        if joint.name in on_path:
+            continue
+        if joint.mimic is not None:
+            ignored.append(f"{joint.name} (mimics {joint.mimic})")
+        elif joint.actuated:
+            ignored.append(f"{joint.name} ({joint.type}, off the chain)")
+    return actuated, ignored
+
+
+# --------------------------------------------------------------------------------------------
+# Axes -> DH rows
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """Per joint: a, alpha, d (revolute) or theta (prismatic), offset, direction; DH frame 0 and
+    DH frame n at q = 0 in the base; the parallel-within-band pairs (index k: axes k, k + 1)."""
+
+    a: list[float]
+    alpha: list[float]
+    fixed: list[float]
+    offset: list[float]
+    direction: list[int]
+    frame_0: NDArray[np.float64]
+    frame_n: NDArray[np.float64]
+    near_parallel: list[int]
+
+
+def _rows_from_axes(chain: URDFChain, convention: str, units: Mapping[str, str]) -> _Rows:
+    from dhkin.ik.family import BAND
+
+    points, axes = chain.axis_lines()
+    n = chain.dof
+    size = max(_chain_size(points, chain.tip[:3, 3]), CLEAN)
+    z = [axes[0] * (-1.0 if axes[0][2] < -CLEAN else 1.0)]
+    for k in range(1, n):
+        previous = z[-1]
+        antiparallel = float(np.dot(axes[k], previous)) < 0 and \
+            float(np.linalg.norm(np.cross(axes[k], previous))) <= BAND.angle
+        z.append(-axes[k] if antiparallel else axes[k])
+    direction = [1 if float(np.dot(z[k], axes[k])) > 0 else -1 for k in range(n)]
+
+    # The normal before axis 1: foot nearest the base origin, x along the base's x.
+    foot = _foot(points[0], z[0], np.zeros(3))
+    helper = np.eye(3)[0] if float(np.linalg.norm(np.cross(np.eye(3)[0], z[0]))) >= 0.5 \
+        else np.eye(3)[1]
+    x_before = _unit(helper - np.dot(helper, z[0]) * z[0])
+    normals = [_Normal(foot, foot, x_before, 0.0, 0.0)]
+    near_parallel = []
+    for k in range(n - 1):
+        normal, near = _common_normal(points[k + 1], z[k], z[k + 1], normals[-1], size, BAND.angle)
+        normals.append(normal)
+        if near:
+            near_parallel.append(k)
+    end = _foot(points[n - 1], z[n - 1], chain.tip[:3, 3])
+    normals.append(_Normal(end, end, normals[-1].x, 0.0, 0.0))
+
+    a, alpha, fixed, offset = [], [], [], []
+    for i in range(n):
+        before, after = normals[i], normals[i + 1]
+        along = float(np.dot(after.start - before.end, z[i]))
+        turn = _angle_about(before.x, after.x, z[i])
+        row = after if convention == "standard" else before
+        a.append(row.a)
+        alpha.append(row.alpha)
+        if chain.revolute[i]:
+            fixed.append(along)
+            offset.append(turn)
+        else:
+            fixed.append(turn)
+            offset.append(along)
+    frame_0 = _frame(normals[0].end, normals[0].x, z[0])
+    frame_n = _frame(normals[n].start, normals[n].x, z[n - 1])
+    return _Rows(a, alpha, fixed, offset, direction, frame_0, frame_n, near_parallel)
+
+
+def _common_normal(point: NDArray[np.float64], z: NDArray[np.float64],
+                   z_next: NDArray[np.float64], before: _Normal, size: float, band: float
+                   ) -> tuple[_Normal, bool]:
+    """The normal from axis k (through ``before.end``, direction z) to axis k + 1 (through
+    ``point``, direction ``z_next``), and whether the axes are parallel within the band but
+    not exactly (the row is then nominal)."""
+    origin = before.end
+    cross = np.cross(z, z_next)
+    sine = float(np.linalg.norm(cross))
+    parallel = sine * size <= CLEAN
+    near = not parallel and sine <= band
+    if parallel or near:
+        start = origin
+        end = _foot(point, z_next, origin)
+        span = end - start
+        span -= np.dot(span, z) * z
+        alpha = 0.0 if float(np.dot(z, z_next)) > 0 else math.pi
+        direction = _unit(span) if float(np.linalg.norm(span)) > CLEAN else before.x
+    else:
+        w = point - origin
+        t_k = float(np.dot(np.cross(w, z_next), cross)) / sine**2
+        t_next = float(np.dot(np.cross(w, z), cross)) / sine**2
+        start = origin + t_k * z
+        end = point + t_next * z_next
+        span = end - start
+        direction = cross / sine
+        alpha = float("nan")  # set below, once x is chosen
+    x = _nearest_sign(direction, before.x, span)
+    a = float(np.dot(span, x))
+    if not (parallel or near):
+        alpha = _angle_about(z, z_next, x)
+    return _Normal(start, end, x, a, alpha), near
+
+
+def _nearest_sign(direction: NDArray[np.float64], previous_x: NDArray[np.float64],
+                  span: NDArray[np.float64]) -> NDArray[np.float64]:
+    """+-direction: the one nearer ``previous_x`` (smallest offset); when both are equally near
+    (to CLEAN), the one with a >= 0."""
+    dot = float(np.dot(direction, previous_x))
+    if abs(dot) > CLEAN:
+        return direction if dot > 0 else -direction
+    return direction if float(np.dot(span, direction)) >= -CLEAN else -direction
+
+
+def _foot(point: NDArray[np.float64], axis: NDArray[np.float64], target: NDArray[np.float64]
+          ) -> NDArray[np.float64]:
+    """The point of the line (point, unit axis) nearest ``target``."""
+    return point + float(np.dot(target - point, axis)) * axis
+
+
+def _angle_about(u: NDArray[np.float64], v: NDArray[np.float64], axis: NDArray[np.float64]
+                 ) -> float:
+    """The angle that turns u onto v about ``axis`` (all unit, u and v perpendicular to it)."""
+    return math.atan2(float(np.dot(np.cross(u, v), axis)), float(np.dot(u, v)))
+
+
+def _unit(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    return v / np.linalg.norm(v)
+
+
+def _frame(origin: NDArray[np.float64], x: NDArray[np.float64], z: NDArray[np.float64]
+           ) -> NDArray[np.float64]:
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = origin
+    return T
+
+
+def _chain_size(points: NDArray[np.float64], tip: NDArray[np.float64]) -> float:
+    """An upper bound of the arm's extent: the polyline base origin -> axis points -> tip (m)."""
+    path = np.vstack([np.zeros(3), points, tip])
+    return float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+
+
+# --------------------------------------------------------------------------------------------
+# The table
+
+
+def _table(description: Description, chain: URDFChain, joints: list, rows: _Rows,
+           convention: str, name: str | None, base: str, tip: str) -> DHTable:
+    table_joints = []
+    for i, joint in enumerate(joints):
+        revolute = chain.revolute[i]
+        lower, upper = joint.lower, joint.upper
+        if joint.type == "continuous" or lower is None or upper is None:
+            if joint.type != "continuous":
+                raise URDFError(f"{description.source}: joint {joint.name!r} ({joint.type}) has "
+                                "no lower/upper limit; expected both", field="joint",
+                                value=joint.name, expected="<limit lower=... upper=...>")
+            lower, upper = -CONTINUOUS_LIMIT, CONTINUOUS_LIMIT
+        table_joints.append(Joint(
+            name=joint.name, link=joint.child, type="revolute" if revolute else "prismatic",
+            a=rows.a[i], alpha=rows.alpha[i], d=rows.fixed[i] if revolute else 0.0,
+            theta=0.0 if revolute else rows.fixed[i], offset=rows.offset[i],
+            direction=rows.direction[i], lower=float(lower), upper=float(upper),
+            velocity=joint.velocity, effort=joint.effort))
+    tool = invert(rows.frame_n) @ chain.tip
+    flange = _flange(description, base, tip, rows.frame_n, tool)
+    table_name = name if name is not None else Path(description.source).name.split(".")[0]
+    return DHTable(name=table_name, convention=convention,  # type: ignore[arg-type]
+                   joints=tuple(table_joints), base=rows.frame_0, tool=tool, flange=flange,
+                   description=f"{description.robot_name}, imported from "
+                               f"{Path(description.source).name} ({base} -> {tip})")
+
+
+def _flange(description: Description, base: str, tip: str, frame_n: NDArray[np.float64],
+            tool: NDArray[np.float64]) -> NDArray[np.float64]:
+    """DH frame n -> flange: the description's ``flange`` link where it hangs rigidly below
+    the last joint, else tool0 -> flange as ROS-Industrial (:data:`TOOL0_TO_FLANGE`)."""
+    if "flange" in description.links and tip != "flange":
+        try:
+            flange_path = description.path(base, "flange")
+        except URDFError:
+            flange_path = []
+        tip_path = description.path(base, tip)
+        moving = [j.name for j in tip_path if j.actuated]
+        if flange_path and [j.name for j in flange_path if j.actuated] == moving:
+            from dhkin.reference import Reference
+
+            pose = Reference(description.text, tip="flange", base=base,
+                             source=description.source).fk(np.zeros(len(moving)))
+            return invert(frame_n) @ pose
+    return tool @ TOOL0_TO_FLANGE
+
+
+def _corrected(table: DHTable, text: str, base: str, tip: str) -> DHTable:
+    """The nominal table (the family's ideal model when one fits within the band) with fitted
+    corrections."""
+    from dhkin.ik.family import fit_family, ideal_model
+
+    first = fit_corrections(table, text, base, tip)
+    try:
+        fit_family(first)
+    except FamilyError:
+        return first
+    ideal = ideal_model(first)
+    return fit_corrections(ideal, text, base, tip)
+
+
+def _clean(table: DHTable, units: Mapping[str, str]) -> DHTable:
+    """Every DH value, correction, base, tool and flange component as the shortest decimal in
+    ``units`` within CLEAN of it (limits, velocities and efforts untouched)."""
+    length, angle = units["length"], units["angle"]
+
+    def clean_joint(joint: Joint) -> Joint:
+        variable = angle if joint.is_revolute else length
+        correction = tuple(_shortest(v, length if k < 3 else angle)
+                           for k, v in enumerate(joint.correction))
+        return replace(joint, a=_shortest(joint.a, length), alpha=_shortest(joint.alpha, angle),
+                       d=_shortest(joint.d, length), theta=_shortest(joint.theta, angle),
+                       offset=_shortest(joint.offset, variable),
+                       correction=correction)  # type: ignore[arg-type]
+
+    return replace(table, joints=tuple(clean_joint(j) for j in table.joints),
+                   base=_clean_frame(table.base, length, angle),
+                   tool=_clean_frame(table.tool, length, angle),
+                   flange=_clean_frame(table.flange, length, angle))
+
+
+def _clean_frame(T: NDArray[np.float64], length: str, angle: str) -> NDArray[np.float64]:
+    xyz = [_shortest(float(v), length) for v in T[:3, 3]]
+    rpy = [_shortest(v, angle) for v in exact_rpy(T)]
+    return xyz_rpy_to_matrix(xyz, rpy)
+
+
+def _shortest(value: float, unit: str) -> float:
+    """The SI value of the shortest decimal in ``unit`` (m, mm, rad or deg) within CLEAN of
+    ``value`` (SI), converted as :func:`dhkin.load_table` converts it."""
+    scale = LENGTH_UNITS[unit] if unit in LENGTH_UNITS else ANGLE_UNITS[unit]
+    in_unit = value / scale
+    for digits in range(18):
+        back = round(in_unit, digits) * scale
+        if abs(back - value) <= CLEAN:
+            return float(back)
+    return value
+
+
+def _source(description: Description, base: str, tip: str, notes: list[str]) -> str:
+    text = (f"Imported with `dhkin import` from {description.source} ({base} -> {tip}): the "
+            "description's zero pose, joint and link names, limits, velocities and efforts")
+    return text + "".join(f"; {note}" for note in notes) + "."
+
+
+def _deviation(table: DHTable, chain: URDFChain) -> tuple[float, float]:
+    rng = np.random.default_rng(0)
+    Q = np.vstack([np.zeros(table.dof), table.random_q(VERIFY_SAMPLES, rng)])
+    position, rotation = pose_error(table.fk(Q), chain.reference.fk(Q))
+    return float(position.max()), float(rotation.max())
+
+
+def _family(table: DHTable) -> tuple[str | None, str, bool]:
+    from dhkin.ik.family import fit_family
+
+    if table.dof != 6:
+        return None, f"{table.dof} joints; the closed-form families have 6", False
+    try:
+        fit = fit_family(table)
+    except FamilyError as exc:
+        problems = exc.value if isinstance(exc.value, dict) else {}
+        reason = "; ".join(f"{family}: {found[0]}" for family, found in problems.items()
+                           if found) or str(exc)
+        return None, reason, False
+    return fit.family, "", fit.refine

@@ -18,7 +18,8 @@ SOURCE = REPO / "src"
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("foundation", ("dhkin.errors", "dhkin.transforms", "dhkin.dh", "dhkin.table_file",
                     "dhkin.reference", "dhkin.urdf", "dhkin.validators", "dhkin.vendors",
-                    "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description")),
+                    "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description",
+                    "dhkin.xml_text")),
     ("kinematics", ("dhkin.ik", "dhkin.ik.*", "dhkin.arm")),
     ("analysis", ("dhkin.singularity", "dhkin.singularity.*", "dhkin.maps", "dhkin.maps.*",
                   "dhkin.validate", "dhkin.validate.*", "dhkin.compare",

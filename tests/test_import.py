@@ -321,8 +321,15 @@ def test_xacro_error_names_the_users_file(tmp_path: Path) -> None:
         import_description(path)
 
 
-def test_bad_arguments() -> None:
+def test_bad_arguments(tmp_path: Path) -> None:
     path = REFERENCE_URDFS / "ur5.urdf"
+    spaced = tmp_path / "my arm.urdf"
+    spaced.write_text(path.read_text())
+    with pytest.raises(InputError, match=r"name \(from the file name .*my arm.*give a name with"):
+        import_description(spaced, "base_link", "tool0")
+    assert import_description(spaced, "base_link", "tool0", name="my_arm").table.name == "my_arm"
+    with pytest.raises(InputError, match=r"name \(from --name\): expected a name other than"):
+        import_description(path, "base_link", "tool0", name="include")
     with pytest.raises(InputError, match="convention: expected one of"):
         import_description(path, "base_link", "tool0", convention="craig")
     with pytest.raises(InputError, match="units: expected"):

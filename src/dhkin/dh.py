@@ -56,6 +56,12 @@ ANGLE_UNITS: dict[str, float] = {"rad": 1.0, "deg": math.pi / 180.0}
 RESERVED_LINK_NAMES: tuple[str, ...] = ("base_link", "base", "flange", "tool0")
 
 
+def fixed_joint_names(last_link: str) -> tuple[str, str, str]:
+    """Names the generator gives its fixed joints (base_link -> base, the last joint's link ->
+    flange, flange -> tool0); a table may not give them to its own joints."""
+    return ("base_link-base", f"{last_link}-flange", "flange-tool0")
+
+
 #: Default DH frame n -> flange: x along the last joint axis (ROS-Industrial), rpy (0, -90, 0) deg.
 DEFAULT_FLANGE_RPY_DEG = (0.0, -90.0, 0.0)
 

@@ -49,6 +49,7 @@ from dhkin.fit import URDFChain, fit_corrections, read_chain
 from dhkin.table_file import ANGLE_UNITS, LENGTH_UNITS, exact_rpy, parse_table, table_to_yaml
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert, pose_error, rot_y, xyz_rpy_to_matrix
+from dhkin.xml_text import NAME_RULE, name_problem
 
 #: Rounding that is not a difference (m and rad): a thousandth of the tolerance. Written
 #: numbers are the shortest decimals this close to the exact values; axes whose sine times the
@@ -390,6 +391,11 @@ def _table(description: Description, chain: URDFChain, joints: list, rows: _Rows
     tool = invert(rows.frame_n) @ chain.tip
     flange = _flange(description, base, tip, rows.frame_n, tool)
     table_name = name if name is not None else Path(description.source).name.split(".")[0]
+    problem = name_problem(table_name, macro=True)
+    if problem is not None:
+        origin = "--name" if name is not None else f"the file name {description.source}"
+        raise InputError(f"name (from {origin}): {problem}; give a name with --name",
+                         field="name", value=table_name, expected=NAME_RULE)
     return DHTable(name=table_name, convention=convention,  # type: ignore[arg-type]
                    joints=tuple(table_joints), base=rows.frame_0, tool=tool, flange=flange,
                    description=f"{description.robot_name}, imported from "

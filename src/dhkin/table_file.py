@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -26,9 +25,11 @@ from dhkin.dh import (
     DHTable,
     Joint,
     _default_flange,
+    fixed_joint_names,
 )
 from dhkin.errors import DHError
 from dhkin.transforms import rot_y, rot_z, xyz_rpy_to_matrix
+from dhkin.xml_text import NAME_RULE, name_problem, text_problem
 
 _TOP_KEYS_REQUIRED = ("name", "convention", "units", "joints")
 
@@ -41,9 +42,6 @@ _JOINT_KEYS_COMMON = ("name", "link", "type", "a", "alpha", "offset", "direction
 
 
 _FRAME_KEYS = ("xyz", "rpy")
-
-
-_NAME_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_\-]*$")
 
 
 def load_table(path: str | Path) -> DHTable:
@@ -71,7 +69,7 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
                       f"got {type(data).__name__}")
     _check_keys(data, _TOP_KEYS_REQUIRED, _TOP_KEYS_OPTIONAL, where, "")
 
-    name = _name(data["name"], where, "name")
+    name = _name(data["name"], where, "name", macro=True)
     convention = data["convention"]
     if convention not in CONVENTIONS:
         raise DHError(where.msg("convention", f"expected one of {list(CONVENTIONS)}, "
@@ -89,6 +87,12 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
     )
     _check_unique([j.name for j in joints], where, "name")
     _check_unique([j.link for j in joints], where, "link")
+    fixed = fixed_joint_names(joints[-1].link)
+    for i, joint in enumerate(joints):
+        if joint.name in fixed:
+            raise where.error(f"joints[{i}].name", joint.name,
+                              f"a name other than those of the generated fixed joints "
+                              f"{list(fixed)}")
 
     base = _frame(data.get("base"), where, "base", length_scale, angle_scale)
     tool = _frame(data.get("tool"), where, "tool", length_scale, angle_scale)
@@ -140,6 +144,14 @@ class _Where:
     def msg(self, field_name: str, expected: str) -> str:
         return f"{self.source}: {field_name}: {expected}"
 
+    def error(self, field_name: str, value: Any, expected: str,
+              problem: str | None = None) -> DHError:
+        """DHError '<file>: <field>: <problem>' (default 'expected <expected>, got <value>')
+        carrying field, value and expected."""
+        text = problem if problem is not None else f"expected {expected}, got {value!r}"
+        return DHError(self.msg(field_name, text), field=field_name, value=value,
+                       expected=expected)
+
 
 def _check_keys(data: Mapping[str, Any], required: Sequence[str], optional: Sequence[str],
                 where: _Where, prefix: str) -> None:
@@ -161,16 +173,21 @@ def _number(value: Any, where: _Where, field_name: str) -> float:
 
 
 def _text(value: Any, where: _Where, field_name: str) -> str:
-    if not isinstance(value, str):
-        raise DHError(where.msg(field_name, f"expected text, got {value!r}"))
-    return value
+    """Free text (description, source): any string XML can hold exactly (dhkin.xml_text)."""
+    problem = text_problem(value)
+    if problem is not None:
+        raise where.error(field_name, value, "text without control characters other than tab "
+                                             "and line feed", problem)
+    return str(value)
 
 
-def _name(value: Any, where: _Where, field_name: str) -> str:
-    if not isinstance(value, str) or not _NAME_PATTERN.match(value):
-        raise DHError(where.msg(field_name, "expected a name of letters, digits, '_' or '-' "
-                                            f"starting with a letter or '_', got {value!r}"))
-    return value
+def _name(value: Any, where: _Where, field_name: str, macro: bool = False) -> str:
+    """A robot, joint or link name (dhkin.xml_text.NAME_RULE); ``macro``: the robot's name, which
+    also names the xacro macro and so may not be one of xacro's directives."""
+    problem = name_problem(value, macro=macro)
+    if problem is not None:
+        raise where.error(field_name, value, NAME_RULE, problem)
+    return str(value)
 
 
 def _units(value: Any, where: _Where) -> tuple[float, float]:

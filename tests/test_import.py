@@ -364,3 +364,32 @@ def test_cli_does_not_overwrite_without_force(tmp_path: Path,
     assert data["name"] == "arm" and [j["name"] for j in data["joints"]] == ["joint_1", "joint_2"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.urdf", "source.xacro",
                                                           "table.yaml"]
+
+
+# --------------------------------------------------------------------------------------------
+# The built-in tables imported from vendor URDFs
+
+
+def test_imported_builtins_equal_a_fresh_import() -> None:
+    """scripts/import_vendor_tables.py --check: each committed imported table is what importing
+    its vendor URDF gives now (so the library of real arms is reproducible)."""
+    import subprocess
+    import sys
+
+    result = subprocess.run([sys.executable, str(REPO / "scripts" / "import_vendor_tables.py"),
+                             "--check", "--reference-dir", str(REFERENCE_URDFS)],
+                            capture_output=True, text=True, check=False)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "0 imported table(s) stale" in result.stdout
+
+
+def test_imported_builtins_cite_their_source() -> None:
+    from dhkin.vendors import IMPORTED, VENDOR_REFERENCES
+
+    assert set(IMPORTED) <= set(dhkin.builtin_names())
+    for name in IMPORTED:
+        table = dhkin.load(name).table
+        vendor = VENDOR_REFERENCES[name]
+        assert f"../shared/reference/{vendor.file} ({vendor.base} -> {vendor.tip})" in table.source
+        assert "Upstream (the file's first comment): github.com/" in table.source
+        assert VENDOR_IMPORTS[vendor.file][:2] == (vendor.base, vendor.tip)

@@ -3,7 +3,8 @@
 :data:`VENDOR_REFERENCES` maps a built-in robot's name to a :class:`VendorReference`: the vendor
 URDF's file name and the frames that correspond to the table's ``base_link`` and ``tool0``.
 The tables of ur5e_calibrated, tm5_900 and kinova_gen3_6dof are fitted to these files
-(scripts/fit_tables.py, dhkin.fit_corrections): their corrections reproduce them exactly.
+(scripts/fit_tables.py, dhkin.fit_corrections): their corrections reproduce them exactly. The
+tables in :data:`IMPORTED` are imported from them (scripts/import_vendor_tables.py).
 """
 
 from __future__ import annotations
@@ -33,4 +34,21 @@ VENDOR_REFERENCES: dict[str, VendorReference] = {
     "ur5e_calibrated": VendorReference("ur5e_calibrated.urdf", "base_link", "tool0"),
     "tm5_900": VendorReference("tm5_900.urdf", "link_0", "flange"),
     "kinova_gen3_6dof": VendorReference("kinova_gen3_6dof.urdf", "base_link", "end_effector_link"),
+    "kuka_kr6r900sixx": VendorReference("kuka_kr6r900sixx.urdf", "base_link", "tool0"),
+    "fanuc_m10ia": VendorReference("fanuc_m10ia.urdf", "base_link", "tool0"),
+    "motoman_gp7": VendorReference("motoman_gp7.urdf", "base_link", "tool0"),
+    "staubli_tx2_60": VendorReference("staubli_tx2_60.urdf", "base_link", "tool0"),
+    "xarm6": VendorReference("xarm6.urdf", "link_base", "link_eef"),
+    "fanuc_crx10ia": VendorReference("fanuc_crx10ia.urdf", "base_link", "flange"),
+}
+
+#: Built-in robots whose tables are imported from their vendor URDF with ``dhkin import``
+#: (scripts/import_vendor_tables.py), and their descriptions.
+IMPORTED: dict[str, str] = {
+    "kuka_kr6r900sixx": "KUKA KR 6 R900 sixx",
+    "fanuc_m10ia": "FANUC M-10iA",
+    "motoman_gp7": "Yaskawa Motoman GP7",
+    "staubli_tx2_60": "Staubli TX2-60",
+    "xarm6": "UFactory xArm6 (axes 5 and 6 0.076 m apart: no closed-form family)",
+    "fanuc_crx10ia": "FANUC CRX-10iA (axes 3 and 4 not parallel: no closed-form family)",
 }

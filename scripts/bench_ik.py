@@ -11,9 +11,9 @@ and makes tool0 poses of them with Pinocchio; a second set has q5 = 0. Every lib
 same poses: dhkin takes base_link -> tool0 poses as they are; each peer gets them converted to its
 own conventions beforehand (untimed): DH frame 0 -> 6 for EAIK (its DH rows take no theta offsets:
 its joint values are converted back), the POE axes of the table for IK-Geo (its Python binding
-reads the rotation transposed), OPW parameters and radians for py-opw-kinematics, a DHRobot of
-the table for the Robotics Toolbox. Every returned solution is converted to URDF joint values
-and put through Pinocchio (``robot.reference().fk``).
+reads the rotation transposed), OPW parameters (dhkin.opw) and radians for py-opw-kinematics, a
+DHRobot of the table for the Robotics Toolbox. Every returned solution is converted to URDF
+joint values and put through Pinocchio (``robot.reference().fk``).
 
 Reported per library, single thread (EAIK's and py-opw's batch calls are given one thread):
 
@@ -54,8 +54,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 import dhkin
+from dhkin.errors import FamilyError
 from dhkin.ik.compiled.direct import DEFER
 from dhkin.ik.workers import default_workers
+from dhkin.opw import opw_parameters
 from dhkin.transforms import invert, pose_error
 
 EXACT = 1e-9
@@ -64,12 +66,6 @@ TWO_PI = 2.0 * math.pi
 DEFAULT_ROBOTS = ("abb_irb1200_7_70", "ur5", "ur5e", "ur5e_calibrated", "tm5_900",
                   "kinova_gen3_6dof")
 PEERS = ("eaik", "opw", "ikgeo", "rtb")
-#: OPW parameters (py-opw-kinematics conventions) of the robots that have them; checked against
-#: dhkin's FK before use.
-OPW_MODELS: dict[str, dict[str, Any]] = {
-    "abb_irb1200_7_70": dict(a1=0.0, a2=-0.042, b=0.0, c1=0.3991, c2=0.35, c3=0.351, c4=0.082,
-                             offsets=(0.0, 0.0, -math.pi / 2, 0.0, 0.0, 0.0)),
-}
 
 
 # --------------------------------------------------------------------------------------------
@@ -253,19 +249,24 @@ def opw_library(robot: dhkin.Robot) -> Library | str:
         from py_opw_kinematics._internal import Robot as OpwRobot
     except ImportError:
         return "not installed (pip install py-opw-kinematics)"
-    parameters = OPW_MODELS.get(robot.name)
-    if parameters is None:
-        return "not an OPW arm (or no OPW parameters for it here)"
-    opw = OpwRobot(KinematicModel(**parameters, flip_axes=(False,) * 6), False)  # radians
-    rng = np.random.default_rng(1)
-    for q in robot.table.random_q(5, rng):
-        if np.abs(np.asarray(opw.forward(tuple(q))) - robot.fk(q)).max() > 1e-12:
-            return "OPW parameters do not reproduce dhkin's FK"
+    try:
+        params = opw_parameters(robot.table)  # checked against the table's FK to 1e-12
+    except FamilyError as exc:
+        return f"not an OPW arm ({str(exc).splitlines()[1].strip()})"
+    model = KinematicModel(**params.geometric, offsets=params.offsets,
+                           flip_axes=tuple(sign < 0 for sign in params.sign_corrections))
+    opw = OpwRobot(model, False)  # radians
+    q = robot.table.random_q(5, np.random.default_rng(1))
+    forward = np.array([opw.forward(tuple(row)) for row in q])
+    if np.abs(params.base @ forward @ params.tool - robot.reference().fk(q)).max() > 1e-12:
+        return "its FK with dhkin.opw's parameters differs from Pinocchio's"
+    to_opw_base, from_tool0 = invert(params.base), invert(params.tool)
     state: dict[str, Any] = {}
 
-    def use(poses: PoseSet) -> None:  # OPW's frames are base_link and tool0 here (checked)
-        state["T"] = [np.ascontiguousarray(T) for T in poses.T]
-        state["flat"] = np.ascontiguousarray(poses.T.reshape(-1, 16))
+    def use(poses: PoseSet) -> None:  # tool0 poses in OPW's frames (identity for the IRB 1200)
+        T = np.ascontiguousarray(to_opw_base @ poses.T @ from_tool0)
+        state["T"] = [np.ascontiguousarray(pose) for pose in T]
+        state["flat"] = np.ascontiguousarray(T.reshape(-1, 16))
 
     def batch() -> NDArray[np.float64]:
         return opw.reach(state["flat"], None, None, 1)[0]
@@ -274,7 +275,7 @@ def opw_library(robot: dhkin.Robot) -> Library | str:
         return [rows[np.all(np.isfinite(rows), axis=1)] for rows in result]
 
     return Library(name="py-opw-kinematics", version=version_of("py-opw-kinematics"),
-                   note="radians; OPW parameters of the table", use=use,
+                   note="radians; parameters from dhkin.opw", use=use,
                    batch_note="`reach` (8 branches), 1 thread",
                    single=lambda k: opw.inverse(state["T"][k], None, None),
                    batch=batch, solutions=solutions)

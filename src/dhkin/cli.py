@@ -45,9 +45,14 @@ def cmd_robots(args: argparse.Namespace) -> int:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    robot = load(args.robot)
+    if args.format == "opw":
+        from dhkin.opw_yaml import export_opw
+
+        print(export_opw(robot.table, args.output))
+        return EXIT_OK
     from dhkin.urdf import export
 
-    robot = load(args.robot)
     for path in export(robot.table, args.output):
         print(path)
     return EXIT_OK
@@ -338,9 +343,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("robots", help="list the built-in robots")
     p.set_defaults(run=cmd_robots)
 
-    p = sub.add_parser("export", help="write <name>_macro.xacro, <name>.urdf.xacro, <name>.urdf")
+    p = sub.add_parser("export", help="write <name>_macro.xacro, <name>.urdf.xacro, <name>.urdf "
+                                      "(or, --format opw, <name>_opw.yaml)")
     _robot_arg(p)
     p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
+    p.add_argument("--format", choices=("urdf", "opw"), default="urdf",
+                   help="urdf: the xacro macro, its top-level xacro and the URDF (default); "
+                        "opw: MoveIt opw_kinematics parameters (spherical-wrist arms with an "
+                        "ortho-parallel basis; an error for any other arm)")
     p.set_defaults(run=cmd_export)
 
     p = sub.add_parser("compare", help="compare a robot with another URDF (e.g. the vendor's)")

@@ -29,6 +29,9 @@ q. How the rows are found, in either convention (DESIGN.md, "The DH table file")
    decimal (in the table's units) within :data:`CLEAN` of the exact value; limits, velocities
    and efforts are copied as they are. The written table, read back, is checked against the
    description on :data:`VERIFY_SAMPLES` random joint vectors: at most DEFAULT_TOLERANCE.
+
+Steps 1-3 are :mod:`dhkin.axes_to_dh`; :data:`CLEAN` (a thousandth of the tolerance) is both
+the rounding of step 5 and the parallel test of step 4.
 """
 
 from __future__ import annotations
@@ -42,19 +45,17 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
+from dhkin.axes_to_dh import CLEAN, AxisRows, rows_from_axes
 from dhkin.description import CONTINUOUS_LIMIT, UNSUPPORTED_TYPES, Description, read_description
 from dhkin.dh import DHTable, Joint
 from dhkin.errors import DHError, FamilyError, InputError, URDFError
 from dhkin.fit import URDFChain, fit_corrections, read_chain
+from dhkin.ik.family import BAND
 from dhkin.table_file import ANGLE_UNITS, LENGTH_UNITS, exact_rpy, parse_table, table_to_yaml
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert, pose_error, rot_y, xyz_rpy_to_matrix
 from dhkin.xml_text import NAME_RULE, name_problem
 
-#: Rounding that is not a difference (m and rad): a thousandth of the tolerance. Written
-#: numbers are the shortest decimals this close to the exact values; axes whose sine times the
-#: arm's size stays below it are parallel.
-CLEAN = DEFAULT_TOLERANCE * 1e-3
 #: Random joint vectors (plus q = 0) on which the written table is checked (fixed seed 0).
 VERIFY_SAMPLES = 1000
 #: tool0 -> flange when the description has no ``flange`` link: ROS-Industrial's flange has its x
@@ -103,18 +104,6 @@ class ImportResult:
         return "\n".join(lines)
 
 
-@dataclass
-class _Normal:
-    """The common normal from axis k to axis k + 1: its feet on both axes, unit x, length a
-    (along x) and twist alpha (z_k -> z_{k+1} about x)."""
-
-    start: NDArray[np.float64]
-    end: NDArray[np.float64]
-    x: NDArray[np.float64]
-    a: float
-    alpha: float
-
-
 def import_description(path: str | Path, base: str | None = None, tip: str | None = None,
                        convention: str = "standard", units: Mapping[str, str] | None = None,
                        xacro_args: Mapping[str, str] | None = None, name: str | None = None
@@ -146,7 +135,8 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
     continuous = [joint.name for joint in joints if joint.type == "continuous"]
     if continuous:
         notes.append(f"continuous joints {continuous} limited to +-360 deg")
-    rows = _rows_from_axes(chain, convention, units)
+    points, axes = chain.axis_lines()
+    rows = rows_from_axes(points, axes, chain.revolute, chain.tip, convention, BAND.angle)
     table = _table(description, chain, joints, rows, convention, name, base, tip)
     if rows.near_parallel:
         pairs = ", ".join(f"{k + 1}-{k + 2}" for k in rows.near_parallel)
@@ -226,151 +216,10 @@ def _chain_joints(description: Description, base: str, tip: str
 
 
 # --------------------------------------------------------------------------------------------
-# Axes -> DH rows
-
-
-@dataclass(frozen=True)
-class _Rows:
-    """Per joint: a, alpha, d (revolute) or theta (prismatic), offset, direction; DH frame 0 and
-    DH frame n at q = 0 in the base; the parallel-within-band pairs (index k: axes k, k + 1)."""
-
-    a: list[float]
-    alpha: list[float]
-    fixed: list[float]
-    offset: list[float]
-    direction: list[int]
-    frame_0: NDArray[np.float64]
-    frame_n: NDArray[np.float64]
-    near_parallel: list[int]
-
-
-def _rows_from_axes(chain: URDFChain, convention: str, units: Mapping[str, str]) -> _Rows:
-    from dhkin.ik.family import BAND
-
-    points, axes = chain.axis_lines()
-    n = chain.dof
-    size = max(_chain_size(points, chain.tip[:3, 3]), CLEAN)
-    z = [axes[0] * (-1.0 if axes[0][2] < -CLEAN else 1.0)]
-    for k in range(1, n):
-        previous = z[-1]
-        antiparallel = float(np.dot(axes[k], previous)) < 0 and \
-            float(np.linalg.norm(np.cross(axes[k], previous))) <= BAND.angle
-        z.append(-axes[k] if antiparallel else axes[k])
-    direction = [1 if float(np.dot(z[k], axes[k])) > 0 else -1 for k in range(n)]
-
-    # The normal before axis 1: foot nearest the base origin, x along the base's x.
-    foot = _foot(points[0], z[0], np.zeros(3))
-    helper = np.eye(3)[0] if float(np.linalg.norm(np.cross(np.eye(3)[0], z[0]))) >= 0.5 \
-        else np.eye(3)[1]
-    x_before = _unit(helper - np.dot(helper, z[0]) * z[0])
-    normals = [_Normal(foot, foot, x_before, 0.0, 0.0)]
-    near_parallel = []
-    for k in range(n - 1):
-        normal, near = _common_normal(points[k + 1], z[k], z[k + 1], normals[-1], size, BAND.angle)
-        normals.append(normal)
-        if near:
-            near_parallel.append(k)
-    end = _foot(points[n - 1], z[n - 1], chain.tip[:3, 3])
-    normals.append(_Normal(end, end, normals[-1].x, 0.0, 0.0))
-
-    a, alpha, fixed, offset = [], [], [], []
-    for i in range(n):
-        before, after = normals[i], normals[i + 1]
-        along = float(np.dot(after.start - before.end, z[i]))
-        turn = _angle_about(before.x, after.x, z[i])
-        row = after if convention == "standard" else before
-        a.append(row.a)
-        alpha.append(row.alpha)
-        if chain.revolute[i]:
-            fixed.append(along)
-            offset.append(turn)
-        else:
-            fixed.append(turn)
-            offset.append(along)
-    frame_0 = _frame(normals[0].end, normals[0].x, z[0])
-    frame_n = _frame(normals[n].start, normals[n].x, z[n - 1])
-    return _Rows(a, alpha, fixed, offset, direction, frame_0, frame_n, near_parallel)
-
-
-def _common_normal(point: NDArray[np.float64], z: NDArray[np.float64],
-                   z_next: NDArray[np.float64], before: _Normal, size: float, band: float
-                   ) -> tuple[_Normal, bool]:
-    """The normal from axis k (through ``before.end``, direction z) to axis k + 1 (through
-    ``point``, direction ``z_next``), and whether the axes are parallel within the band but
-    not exactly (the row is then nominal)."""
-    origin = before.end
-    cross = np.cross(z, z_next)
-    sine = float(np.linalg.norm(cross))
-    parallel = sine * size <= CLEAN
-    near = not parallel and sine <= band
-    if parallel or near:
-        start = origin
-        end = _foot(point, z_next, origin)
-        span = end - start
-        span -= np.dot(span, z) * z
-        alpha = 0.0 if float(np.dot(z, z_next)) > 0 else math.pi
-        direction = _unit(span) if float(np.linalg.norm(span)) > CLEAN else before.x
-    else:
-        w = point - origin
-        t_k = float(np.dot(np.cross(w, z_next), cross)) / sine**2
-        t_next = float(np.dot(np.cross(w, z), cross)) / sine**2
-        start = origin + t_k * z
-        end = point + t_next * z_next
-        span = end - start
-        direction = cross / sine
-        alpha = float("nan")  # set below, once x is chosen
-    x = _nearest_sign(direction, before.x, span)
-    a = float(np.dot(span, x))
-    if not (parallel or near):
-        alpha = _angle_about(z, z_next, x)
-    return _Normal(start, end, x, a, alpha), near
-
-
-def _nearest_sign(direction: NDArray[np.float64], previous_x: NDArray[np.float64],
-                  span: NDArray[np.float64]) -> NDArray[np.float64]:
-    """+-direction: the one nearer ``previous_x`` (smallest offset); when both are equally near
-    (to CLEAN), the one with a >= 0."""
-    dot = float(np.dot(direction, previous_x))
-    if abs(dot) > CLEAN:
-        return direction if dot > 0 else -direction
-    return direction if float(np.dot(span, direction)) >= -CLEAN else -direction
-
-
-def _foot(point: NDArray[np.float64], axis: NDArray[np.float64], target: NDArray[np.float64]
-          ) -> NDArray[np.float64]:
-    """The point of the line (point, unit axis) nearest ``target``."""
-    return point + float(np.dot(target - point, axis)) * axis
-
-
-def _angle_about(u: NDArray[np.float64], v: NDArray[np.float64], axis: NDArray[np.float64]
-                 ) -> float:
-    """The angle that turns u onto v about ``axis`` (all unit, u and v perpendicular to it)."""
-    return math.atan2(float(np.dot(np.cross(u, v), axis)), float(np.dot(u, v)))
-
-
-def _unit(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    return v / np.linalg.norm(v)
-
-
-def _frame(origin: NDArray[np.float64], x: NDArray[np.float64], z: NDArray[np.float64]
-           ) -> NDArray[np.float64]:
-    T = np.eye(4)
-    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-    T[:3, 3] = origin
-    return T
-
-
-def _chain_size(points: NDArray[np.float64], tip: NDArray[np.float64]) -> float:
-    """An upper bound of the arm's extent: the polyline base origin -> axis points -> tip (m)."""
-    path = np.vstack([np.zeros(3), points, tip])
-    return float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
-
-
-# --------------------------------------------------------------------------------------------
 # The table
 
 
-def _table(description: Description, chain: URDFChain, joints: list, rows: _Rows,
+def _table(description: Description, chain: URDFChain, joints: list, rows: AxisRows,
            convention: str, name: str | None, base: str, tip: str) -> DHTable:
     table_joints = []
     for i, joint in enumerate(joints):

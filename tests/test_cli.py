@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 import dhkin
 from dhkin.cli import main
@@ -74,6 +75,51 @@ def test_compare_with_the_wrong_vendor_fails(capsys) -> None:
     code, out, _ = run(capsys, "compare", "ur5", str(REFERENCE_URDFS / "ur10.urdf"), "-n", "50")
     assert code == 1
     assert out.startswith("FAIL:")
+
+
+def test_compare_joint_differences_fail_only_with_strict(capsys) -> None:
+    """UR3 against its vendor file: the poses agree, the vendor's wrist_3_joint is continuous.
+    The difference is listed; exit 0, and 1 with --strict."""
+    args = ("compare", "ur3", str(REFERENCE_URDFS / "ur3.urdf"), "-n", "50")
+    code, out, _ = run(capsys, *args)
+    assert code == 0, out
+    assert out.startswith("OK:")
+    assert "joint 6 (wrist_3_joint) type: revolute vs continuous" in out
+    assert "--strict makes this a failure" in out
+    code, out, _ = run(capsys, *args, "--strict")
+    assert code == 1, out
+    assert "joint 6 (wrist_3_joint) type: revolute vs continuous" in out
+    assert "(--strict: FAIL)" in out
+
+
+def test_compare_strict_passes_on_equal_joints(capsys) -> None:
+    code, out, _ = run(capsys, "compare", "ur5", str(REFERENCE_URDFS / "ur5.urdf"), "-n", "50",
+                       "--strict")
+    assert code == 0, out
+    assert "joints: the 6 chain joints have equal names, types, limits and velocities" in out
+
+
+def test_compare_limit_difference_of_a_table_file(capsys, tmp_path) -> None:
+    """A UR5 table file with elbow_joint's upper limit at 179 deg: listed, exit 0; --strict 1."""
+    data = yaml.safe_load((REPO / "robots" / "ur5.yaml").read_text(encoding="utf-8"))
+    data["joints"][2]["upper"] = 179
+    table = tmp_path / "ur5_narrow.yaml"
+    table.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    args = ("compare", str(table), str(REFERENCE_URDFS / "ur5.urdf"), "-n", "50")
+    code, out, _ = run(capsys, *args)
+    assert code == 0, out
+    assert "joint 3 (elbow_joint) upper: 3.12413936106985 rad (179 deg) vs 3.141592653589793" in out
+    code, _, _ = run(capsys, *args, "--strict")
+    assert code == 1
+
+
+def test_compare_pose_failure_exits_1_with_or_without_strict(capsys) -> None:
+    """UR5 against the UR10 file: poses and velocities differ; exit 1 either way."""
+    for extra in ((), ("--strict",)):
+        code, out, _ = run(capsys, "compare", "ur5", str(REFERENCE_URDFS / "ur10.urdf"), "-n",
+                           "50", *extra)
+        assert code == 1 and out.startswith("FAIL:"), out
+        assert "joint 1 (shoulder_pan_joint) velocity:" in out
 
 
 def test_compare_missing_frame_is_a_clear_error(capsys) -> None:

@@ -11,6 +11,10 @@ so it must cope with other link names, extra fixed frames (``world``, ``base_lin
 * example-robot-data's older ``ur_description/urdf/ur{3,5,10}_robot.urdf``: base_link, base and
   tool0 are the frames they share with ours (no flange; other intermediate link frames).
 * A table that is wrong by 1 mm, 0.01 deg or a sign must fail the comparison.
+* Joint properties (names, types, limits, velocities in chain order): each kind of difference is
+  reported, on tables and vendor files changed in tmp_path; the built-in tables' limits and
+  velocities are the vendor files' (IRB 1200 joint 6: +-6.283 rad, not +-2 pi), and the IK
+  answers stay within them.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ import pytest
 import yaml
 
 import dhkin
-from dhkin.compare import compare_with_urdf
+from dhkin.compare import LIMIT_TOLERANCE, compare_with_urdf
 from dhkin.reference import Reference
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
@@ -251,3 +255,287 @@ def test_every_vendor_reference_matches_its_builtin(name: str) -> None:
                                base_frame=entry.base, tip=entry.tip, robot_tip=entry.robot_tip,
                                n=1000, seed=4)
     assert report.ok, report.summary()
+
+
+# --------------------------------------------------------------------------------------------
+# Joint properties: names, types, limits and velocities, table against the other URDF
+
+#: The only joint differences of the built-in tables from their vendor files: the vendor's
+#: continuous joints, which a table writes as -360..360 deg (every angle, twice).
+CONTINUOUS_IN_VENDOR: dict[str, set[int]] = {"ur3": {5}, "kinova_gen3_6dof": {0, 3, 5}}
+
+
+def _table_variant(tmp_path: Path, name: str, joint: int, change: dict[str, Any],
+                   remove: tuple[str, ...] = ()) -> dhkin.Robot:
+    """A copy of a built-in table file in tmp_path with one joint entry changed."""
+    data = yaml.safe_load((REPO / "robots" / f"{name}.yaml").read_text(encoding="utf-8"))
+    data["joints"][joint].update(change)
+    for key in remove:
+        del data["joints"][joint][key]
+    path = tmp_path / f"{name}_variant.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    return dhkin.load(path)
+
+
+def _urdf_variant(tmp_path: Path, name: str, old: str, new: str) -> Path:
+    """A copy of a vendor URDF in tmp_path with one piece of text replaced (exactly once)."""
+    text = vendor_path(name).read_text(encoding="utf-8")
+    assert text.count(old) == 1, old
+    path = tmp_path / f"{name}_variant.urdf"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("name", sorted(VENDOR_REFERENCES))
+def test_builtin_limits_and_velocities_are_the_vendors(name: str) -> None:
+    """Every built-in with a vendor reference takes its position and velocity limits from that
+    URDF (within LIMIT_TOLERANCE = 1e-12) and its joint names; the types differ only where the
+    vendor has a continuous joint, and there the table's range covers every angle."""
+    entry = VENDOR_REFERENCES[name]
+    report = compare_with_urdf(dhkin.load(name), REFERENCE_URDFS / entry.file,
+                               base_frame=entry.base, tip=entry.tip, robot_tip=entry.robot_tip,
+                               n=10, seed=5)
+    assert report.limit_tolerance == LIMIT_TOLERANCE == 1e-12
+    assert report.limit_differences == (), report.summary()
+    differences = {(d.index, d.field) for d in report.joint_differences}
+    assert differences == {(k, "type") for k in CONTINUOUS_IN_VENDOR.get(name, set())}
+    for difference in report.joint_differences:
+        assert (difference.ours, difference.theirs) == ("revolute", "continuous")
+        assert "covers every angle" in difference.note
+    for ours, theirs in zip(report.joints, report.other_joints, strict=True):
+        if theirs.type != "continuous":
+            assert theirs.lower is not None and theirs.upper is not None
+            assert ours.lower == pytest.approx(theirs.lower, abs=LIMIT_TOLERANCE, rel=0)
+            assert ours.upper == pytest.approx(theirs.upper, abs=LIMIT_TOLERANCE, rel=0)
+        assert theirs.velocity is not None
+        assert ours.velocity == pytest.approx(theirs.velocity, abs=LIMIT_TOLERANCE, rel=0)
+
+
+def test_irb1200_limits_are_the_vendors_rounded_radians() -> None:
+    """The case of the issue: IRB 1200 joint 6 at +-6.283 rad as ABB's URDF, not +-2 pi."""
+    table = dhkin.load("abb_irb1200_7_70").table
+    assert (table.joints[5].lower, table.joints[5].upper) == (-6.283, 6.283)
+    assert (table.joints[2].lower, table.joints[2].upper) == (-3.491, 1.222)
+
+
+def _ik_against_vendor_limits(robot: dhkin.Robot, name: str,
+                              q6_band: tuple[float, float]) -> tuple[int, int]:
+    """Poses made by the vendor URDF with q6 in ``q6_band``, solved seeded at either end of the
+    vendor's ranges, with and without every 2 pi copy; each answer must be exact on the vendor
+    URDF. Returns the number of answers and of answers outside the vendor's limits."""
+    entry = VENDOR_REFERENCES[name]
+    path = REFERENCE_URDFS / entry.file
+    vendor = Reference(path.read_text(encoding="utf-8"), tip=entry.tip, base=entry.base)
+    lower = np.array([j.lower for j in vendor.joint_properties()])
+    upper = np.array([j.upper for j in vendor.joint_properties()])
+    rng = np.random.default_rng(6)
+    q = rng.uniform(lower, upper, (20, 6))
+    q[:, 5] = rng.uniform(*q6_band, len(q))
+    found = outside = 0
+    for row in q:
+        target = vendor.fk(row)
+        for seed, copies in ((lower, False), (upper, False), (None, True)):
+            solutions = robot.ik(target, q_seed=seed, copies=copies)
+            assert len(solutions) > 0
+            found += len(solutions)
+            outside += int(np.sum(np.any((solutions.q < lower) | (solutions.q > upper), axis=1)))
+            position, rotation = pose_error(vendor.fk(solutions.q),
+                                            np.broadcast_to(target, (len(solutions), 4, 4)))
+            assert position.max() <= TOLERANCE and rotation.max() <= TOLERANCE
+    return found, outside
+
+
+def test_irb1200_ik_answers_are_within_the_vendor_limits() -> None:
+    """The issue's case: q6 in (0, 1.8e-4) rad has a 2 pi copy in (-2 pi, -6.283), which the
+    table's old +-360 deg let through and ABB's +-6.283 rad rejects. Now no answer of any seed
+    or copy leaves the vendor's limits, while the old table's answers do."""
+    band = (1e-6, 1.8e-4)
+    found, outside = _ik_against_vendor_limits(dhkin.load("abb_irb1200_7_70"),
+                                               "abb_irb1200_7_70", band)
+    assert found > 60 and outside == 0
+    data = yaml.safe_load((REPO / "robots" / "abb_irb1200_7_70.yaml").read_text(encoding="utf-8"))
+    data["joints"][5].update(lower=-2 * math.pi, upper=2 * math.pi)
+    old = dhkin.Robot(dhkin.parse_table(data, source="IRB 1200 with joint 6 at +-360 deg"))
+    assert _ik_against_vendor_limits(old, "abb_irb1200_7_70", band)[1] > 0
+
+
+def test_aubo_ik_answers_are_within_the_vendor_limits() -> None:
+    found, outside = _ik_against_vendor_limits(dhkin.load("aubo_i10"), "aubo_i10",
+                                               (-math.pi, math.pi))
+    assert found > 60 and outside == 0
+
+
+def test_limit_difference_is_reported(tmp_path: Path) -> None:
+    """UR5 table with elbow_joint upper = 179 deg: one 'upper' difference, poses still OK."""
+    robot = _table_variant(tmp_path, "ur5", 2, {"upper": 179})
+    report = compare_with_urdf(robot, vendor_path("ur5"), n=50)
+    assert report.ok and not report.joints_ok and not report.strict_ok
+    assert len(report.joint_differences) == 1
+    difference = report.joint_differences[0]
+    assert (difference.index, difference.joint, difference.field) == (2, "elbow_joint", "upper")
+    assert difference.ours == math.radians(179) and difference.theirs == math.pi
+    assert report.limit_differences == (difference,)
+    assert "179 deg" in difference.note and "3.141592653589793 rad" in difference.note
+    lines = report.summary().splitlines()
+    assert lines[0].startswith("OK: ")
+    assert lines[1].startswith("joints: 1 difference(s) in the 6 chain joints")
+    assert lines[2] == f"  {difference}"
+    assert lines[2].startswith("  joint 3 (elbow_joint) upper: ")
+
+
+def test_limit_difference_in_the_other_urdf_is_reported(tmp_path: Path) -> None:
+    """The vendor UR5 with wrist_3_joint's limits rounded to 6.2832: lower and upper differ."""
+    text = vendor_path("ur5").read_text(encoding="utf-8")
+    start = text.index('<joint name="wrist_3_joint"')
+    full = 'lower="-6.283185307179586" upper="6.283185307179586"'
+    assert full in text[start:text.index("</joint>", start)]
+    path = tmp_path / "ur5_variant.urdf"
+    path.write_text(text[:start] + text[start:].replace(full, 'lower="-6.2832" upper="6.2832"', 1),
+                    encoding="utf-8")
+    report = compare_with_urdf(dhkin.load("ur5"), path, n=50)
+    assert [(d.index, d.field, d.theirs) for d in report.joint_differences] == [
+        (5, "lower", -6.2832), (5, "upper", 6.2832)]
+    assert report.ok and not report.strict_ok
+
+
+def test_limits_equal_within_the_stated_tolerance_only(tmp_path: Path) -> None:
+    """A table limit 5e-13 rad off the vendor's is equal (deg/rad rounding is below 1e-12); one
+    2e-12 rad off is reported. limit_tolerance= changes the threshold."""
+    close = _table_variant(tmp_path, "ur5", 2, {"upper": math.degrees(math.pi + 5e-13)})
+    assert abs(close.table.joints[2].upper - math.pi) < 1e-12
+    assert compare_with_urdf(close, vendor_path("ur5"), n=5).joints_ok
+    off = _table_variant(tmp_path, "ur5", 2, {"upper": math.degrees(math.pi + 2e-12)})
+    report = compare_with_urdf(off, vendor_path("ur5"), n=5)
+    assert [(d.index, d.field) for d in report.joint_differences] == [(2, "upper")]
+    assert compare_with_urdf(off, vendor_path("ur5"), n=5, limit_tolerance=1e-11).joints_ok
+
+
+def test_limit_tolerance_covers_deg_to_rad_rounding() -> None:
+    """The derivation of LIMIT_TOLERANCE: every limit written in whole or tenth degrees up to
+    +-720 deg, converted as the table reader does (v * fl(pi/180)), lands within 3.4e-16 |x|
+    of the double nearest the exact radians (what a vendor URDF writing them in full gives),
+    far below 1e-12."""
+    from fractions import Fraction
+
+    pi = Fraction("3.14159265358979323846264338327950288419716939937510582097494459")
+    scale = math.pi / 180.0
+    worst = 0.0
+    for tenths in range(-7200, 7201):
+        degrees = tenths / 10
+        exact = float(Fraction(tenths, 10) * pi / 180)
+        ours = degrees * scale
+        worst = max(worst, abs(ours - exact))
+        assert abs(ours - exact) <= 3.4e-16 * max(abs(exact), 1e-300) or ours == exact
+    assert 0.0 < worst < 1e-14 < LIMIT_TOLERANCE
+
+
+def test_type_difference_with_a_continuous_joint_is_reported() -> None:
+    """The vendor UR3's continuous wrist_3_joint against the table's -360..360 deg: a type
+    difference whose note says the URDF joint has no limits; no limit difference."""
+    report = compare_with_urdf(dhkin.load("ur3"), vendor_path("ur3"), n=50)
+    assert report.ok and not report.strict_ok
+    assert report.limit_differences == ()
+    (difference,) = report.joint_differences
+    assert (difference.index, difference.joint, difference.field) == (5, "wrist_3_joint", "type")
+    assert (difference.ours, difference.theirs) == ("revolute", "continuous")
+    assert "no limits" in difference.note and "-360..360 deg covers every angle" in difference.note
+    assert report.other_joints[5].lower is None and report.other_joints[5].upper is None
+
+
+def test_type_difference_says_when_the_table_does_not_cover_every_angle(tmp_path: Path) -> None:
+    robot = _table_variant(tmp_path, "ur3", 5, {"lower": -170, "upper": 170})
+    (difference,) = compare_with_urdf(robot, vendor_path("ur3"), n=50).joint_differences
+    assert difference.field == "type" and "does not cover every angle" in difference.note
+
+
+def test_revolute_against_prismatic_is_a_type_difference(tmp_path: Path) -> None:
+    """A vendor joint turned prismatic: a type difference (and the poses differ too)."""
+    path = _urdf_variant(tmp_path, "ur5", '<joint name="wrist_2_joint" type="revolute">',
+                         '<joint name="wrist_2_joint" type="prismatic">')
+    report = compare_with_urdf(dhkin.load("ur5"), path, n=50)
+    assert not report.ok
+    types = [(d.index, d.ours, d.theirs) for d in report.joint_differences if d.field == "type"]
+    assert types == [(4, "revolute", "prismatic")]
+
+
+def test_missing_velocity_is_reported(tmp_path: Path) -> None:
+    """A table without `velocity` writes velocity="0" into its URDF: reported as none given."""
+    robot = _table_variant(tmp_path, "ur5", 0, {}, remove=("velocity",))
+    assert 'velocity="0"' in robot.urdf()
+    report = compare_with_urdf(robot, vendor_path("ur5"), n=50)
+    (difference,) = report.joint_differences
+    assert (difference.index, difference.field) == (0, "velocity")
+    assert (difference.ours, difference.theirs) == (None, math.pi)
+    assert difference.note.startswith("the table gives none")
+    assert report.limit_differences == (difference,) and report.ok and not report.strict_ok
+
+
+def test_velocity_missing_in_the_other_urdf_is_reported(tmp_path: Path) -> None:
+    """A continuous vendor joint without <limit> states no velocity (Pinocchio: inf)."""
+    path = _urdf_variant(tmp_path, "ur3", '<limit effort="12.0" velocity="6.283185307179586" />',
+                         "")
+    report = compare_with_urdf(dhkin.load("ur3"), path, n=50)
+    assert [(d.index, d.field) for d in report.joint_differences] == [(5, "type"),
+                                                                       (5, "velocity")]
+    velocity = report.joint_differences[1]
+    assert velocity.theirs is None and "none stated in the other URDF" in velocity.note
+
+
+def test_different_velocity_is_reported(tmp_path: Path) -> None:
+    robot = _table_variant(tmp_path, "ur5", 3, {"velocity": 191})
+    (difference,) = compare_with_urdf(robot, vendor_path("ur5"), n=50).joint_differences
+    assert (difference.index, difference.field) == (3, "velocity")
+    assert difference.ours == math.radians(191) and difference.theirs == math.pi
+
+
+def test_renamed_joint_is_reported(tmp_path: Path) -> None:
+    """A table naming shoulder_lift_joint joint_2: a name difference; poses and limits agree."""
+    robot = _table_variant(tmp_path, "ur5", 1, {"name": "joint_2"})
+    report = compare_with_urdf(robot, vendor_path("ur5"), n=50)
+    (difference,) = report.joint_differences
+    assert (difference.index, difference.field) == (1, "name")
+    assert (difference.ours, difference.theirs) == ("joint_2", "shoulder_lift_joint")
+    assert report.ok and report.limit_differences == () and not report.strict_ok
+    assert "'joint_2' vs 'shoulder_lift_joint'" in report.summary()
+
+
+def test_equal_joints_are_summarised_in_one_line() -> None:
+    report = compare_with_urdf(dhkin.load("ur5"), vendor_path("ur5"), n=20)
+    assert report.strict_ok and report.joints_ok
+    assert report.summary().splitlines()[1] == (
+        "joints: the 6 chain joints have equal names, types, limits and velocities (limits "
+        "within 1e-12)")
+
+
+def test_negative_limit_tolerance_is_refused() -> None:
+    with pytest.raises(dhkin.InputError, match="limit_tolerance: expected a number >= 0"):
+        compare_with_urdf(dhkin.load("ur5"), vendor_path("ur5"), n=5, limit_tolerance=-1.0)
+
+
+def test_check_fails_on_a_limit_difference_only(tmp_path: Path) -> None:
+    """`dhkin check`'s vendor cell: a vendor file whose IRB 1200 joint 6 runs +-2 pi (what the
+    table said before) fails it, naming the joint; the UR3's continuous joint is listed but
+    passes; equal joints say so."""
+    from dhkin.checks import check_vendor
+
+    text = vendor_path("abb_irb1200_7_70").read_text(encoding="utf-8")
+    assert text.count('lower="-6.283" upper="6.283"') == 1
+    (tmp_path / "abb_irb1200_7_70.urdf").write_text(
+        text.replace('lower="-6.283" upper="6.283"',
+                     'lower="-6.283185307179586" upper="6.283185307179586"'), encoding="utf-8")
+    cell = check_vendor(dhkin.load("abb_irb1200_7_70"), tmp_path)
+    assert cell is not None and not cell.ok
+    assert "joint_6 lower -6.283 vs -6.283185307179586" in cell.text
+    assert "joint_6 upper 6.283 vs 6.283185307179586" in cell.text
+    ur3 = check_vendor(dhkin.load("ur3"), REFERENCE_URDFS)
+    assert ur3 is not None and ur3.ok and "wrist_3_joint type revolute vs continuous" in ur3.text
+    ur5 = check_vendor(dhkin.load("ur5"), REFERENCE_URDFS)
+    assert ur5 is not None and ur5.ok and ur5.text.endswith(", joints equal")
+
+
+def test_compare_joints_needs_chains_of_equal_length() -> None:
+    from dhkin.compare import compare_joints, table_joint_properties
+
+    joints = table_joint_properties(dhkin.load("ur5").table)
+    with pytest.raises(dhkin.InputError, match="theirs: expected 6 joints like ours, got 5"):
+        compare_joints(joints, joints[:5])

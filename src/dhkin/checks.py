@@ -1,8 +1,11 @@
 """The main job, `dhkin check`: for each built-in robot, regenerate, validate and cross-check.
 
 Per robot, in order: the committed xacro/URDF equal regeneration; the URDF passes check_urdf,
-Pinocchio and yourdfpy; own FK equals Pinocchio FK; the vendor URDF agrees where one exists; the
-IK is cross-validated (dhkin.validate) twice:
+Pinocchio and yourdfpy; own FK equals Pinocchio FK; the vendor URDF agrees where one exists
+("vendor": poses within 1e-9, and position and velocity limits equal within
+dhkin.compare.LIMIT_TOLERANCE, since the built-in tables take them from the vendor files; joint
+name and type differences, such as a vendor's continuous joint where the table has +-360 deg, are
+listed in the cell without failing it); the IK is cross-validated (dhkin.validate) twice:
 
 * "ik vs pin": targets made and solutions checked by Pinocchio on the exact generated URDF
   (``reference="exact"``): closed-form IK on ``ik_poses`` uniform poses plus the special-angle and
@@ -89,7 +92,8 @@ def check_fk(robot: Robot, seed: int) -> CheckCell:
 
 
 def check_vendor(robot: Robot, reference_dir: Path | None) -> CheckCell | None:
-    """Max pose deviation from the vendor URDF, or None when the robot has no reference."""
+    """Max pose deviation from the vendor URDF and its joint differences (failing on poses and
+    on limits; see the module docstring), or None when the robot has no reference."""
     if robot.name not in VENDOR_REFERENCES:
         return None
     vendor = VENDOR_REFERENCES[robot.name]
@@ -97,7 +101,21 @@ def check_vendor(robot: Robot, reference_dir: Path | None) -> CheckCell | None:
         return CheckCell(False, f"missing {vendor.file}")
     report = compare_with_urdf(robot, reference_dir / vendor.file, base_frame=vendor.base,
                                tip=vendor.tip, robot_tip=vendor.robot_tip)
-    return CheckCell(report.ok, f"{max(report.max_position, report.max_rotation):.1e}")
+    text = f"{max(report.max_position, report.max_rotation):.1e}"
+    if report.joints_ok:
+        text += ", joints equal"
+    else:
+        text += ", " + "; ".join(f"{d.joint} {d.field} {_short(d.ours)} vs {_short(d.theirs)}"
+                                 for d in report.joint_differences)
+    return CheckCell(report.ok and not report.limit_differences, text)
+
+
+def _short(value: str | float | None) -> str:
+    """A joint property for a table cell: text as is, numbers in full (repr: any difference
+    above LIMIT_TOLERANCE shows), None as 'none'."""
+    if value is None:
+        return "none"
+    return value if isinstance(value, str) else repr(value)
 
 
 def _ik_text(report: ValidationReport) -> str:

@@ -59,6 +59,8 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
+    """Poses and joints (names, types, limits, velocities) of a table against another URDF.
+    Exit 1 on a pose deviation above --tolerance; with --strict also on any joint difference."""
     from dhkin.compare import compare_with_urdf
 
     report = compare_with_urdf(load(args.robot), args.urdf, base_frame=args.base_frame,
@@ -67,7 +69,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
     print(report.summary())
     if not report.ok:
         print(f"worst joint vector (rad): {np.array2string(report.worst_q, precision=6)}")
-    return EXIT_OK if report.ok else EXIT_FAILED
+    if report.ok and not report.joints_ok:
+        print("the poses agree; the joints differ" + (" (--strict: FAIL)" if args.strict else
+                                                     " (exit 0; --strict makes this a failure)"))
+    passed = report.strict_ok if args.strict else report.ok
+    return EXIT_OK if passed else EXIT_FAILED
 
 
 def cmd_import(args: argparse.Namespace) -> int:
@@ -353,7 +359,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "ortho-parallel basis; an error for any other arm)")
     p.set_defaults(run=cmd_export)
 
-    p = sub.add_parser("compare", help="compare a robot with another URDF (e.g. the vendor's)")
+    p = sub.add_parser("compare", help="compare a robot with another URDF (e.g. the vendor's): "
+                                       "poses, and joint names, types, limits and velocities")
     _robot_arg(p)
     p.add_argument("urdf", help="the other URDF file")
     p.add_argument("--base-frame", default="base_link", help="base frame in the other URDF")
@@ -363,6 +370,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
+    p.add_argument("--strict", action="store_true",
+                   help="also fail (exit 1) on any difference of joint names, types, limits or "
+                        "velocities (always reported)")
     p.set_defaults(run=cmd_compare)
 
     p = sub.add_parser("import", help="import a URDF or xacro description as a DH table")

@@ -8,6 +8,9 @@ can be driven with the same 6-vector as a DH table.
 
 Poses are ``base -> frame`` 4x4 transforms, where ``base`` is a frame of the model (default: the
 root link, which Pinocchio calls the universe).
+
+:meth:`Reference.joint_properties` reads the chain's joints as Pinocchio parsed them: name, type
+(revolute, continuous, prismatic), position limits and velocity limit, in chain order.
 """
 
 from __future__ import annotations
@@ -27,6 +30,41 @@ REFERENCE_FRAMES: dict[str, pin.ReferenceFrame] = {
     "world": pin.ReferenceFrame.WORLD,
     "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
 }
+
+
+#: Pinocchio joint models (``shortname()``) -> URDF joint type. A continuous joint is a revolute
+#: joint without bounds ("RUB": nq 2, cos/sin). Any other model keeps its Pinocchio name.
+JOINT_TYPES_BY_MODEL: dict[str, str] = {
+    **{f"JointModelR{axis}": "revolute" for axis in "XYZ"},
+    "JointModelRevoluteUnaligned": "revolute",
+    **{f"JointModelRUB{axis}": "continuous" for axis in "XYZ"},
+    "JointModelRevoluteUnboundedUnaligned": "continuous",
+    **{f"JointModelP{axis}": "prismatic" for axis in "XYZ"},
+    "JointModelPrismaticUnaligned": "prismatic",
+}
+
+
+@dataclass(frozen=True)
+class JointProperties:
+    """One actuated joint as a description states it (SI: rad or m, rad/s or m/s).
+
+    ``type`` is "revolute", "continuous" or "prismatic" (another Pinocchio joint model keeps its
+    name, e.g. "JointModelPlanar"). ``lower``/``upper`` are None where the joint has no position
+    limits (continuous). ``velocity`` is None where none is stated: a URDF continuous joint
+    without ``<limit>`` (Pinocchio: inf) or a velocity of 0, which no moving joint can have (a
+    DH table without ``velocity`` writes 0 into its URDF).
+    """
+
+    name: str
+    type: str
+    lower: float | None
+    upper: float | None
+    velocity: float | None
+
+
+def stated_velocity(value: float) -> float | None:
+    """A velocity limit as stated, or None for "not stated" (0 or inf; see JointProperties)."""
+    return None if value == 0.0 or not np.isfinite(value) else float(value)
 
 
 @dataclass(frozen=True)
@@ -76,6 +114,21 @@ class Reference:
     @property
     def dof(self) -> int:
         return len(self.chain)
+
+    def joint_properties(self) -> list[JointProperties]:
+        """Name, type, position limits and velocity limit of each chain joint, base to tip, as
+        Pinocchio read them from the URDF (``model.lowerPositionLimit``, ``upperPositionLimit``,
+        ``velocityLimit``; continuous joints: no position limits)."""
+        properties = []
+        for j, name in zip(self.chain, self.joint_names, strict=True):
+            joint = self.model.joints[j]
+            kind = JOINT_TYPES_BY_MODEL.get(joint.shortname(), joint.shortname())
+            bounded = kind != "continuous" and joint.nq == 1
+            lower = float(self.model.lowerPositionLimit[joint.idx_q]) if bounded else None
+            upper = float(self.model.upperPositionLimit[joint.idx_q]) if bounded else None
+            velocity = stated_velocity(float(self.model.velocityLimit[joint.idx_v]))
+            properties.append(JointProperties(name, kind, lower, upper, velocity))
+        return properties
 
     def frame_id(self, name: str) -> int:
         """Pinocchio frame index of ``name``; URDFError listing the frames if it does not exist."""

@@ -5,6 +5,9 @@ URDF's file name and the frames that correspond to the table's ``base_link`` and
 The tables of ur5e_calibrated, tm5_900 and kinova_gen3_6dof are fitted to these files
 (scripts/fit_tables.py, dhkin.fit_corrections): their corrections reproduce them exactly. The
 tables in :data:`IMPORTED` are imported from them (scripts/import_vendor_tables.py).
+Every table listed here takes its joint limits and velocities exactly from its vendor file
+(`dhkin compare`, `dhkin check` and tests/test_vendor_compare.py check it); the vendor's
+continuous joints (UR3 wrist_3_joint, Kinova joints 1, 4, 6) are -360..360 deg in the tables.
 """
 
 from __future__ import annotations

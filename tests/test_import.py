@@ -80,6 +80,12 @@ def test_vendor_import_round_trip(file: str, tmp_path: Path) -> None:
     robot = dhkin.load(output)
     report = compare_with_urdf(robot, vendor, base_frame=base, tip=tip, n=COMPARE_SAMPLES)
     assert report.max_position <= DEFAULT_TOLERANCE and report.max_rotation <= DEFAULT_TOLERANCE
+    # Names, limits and velocities equal; the only joint difference allowed is a vendor
+    # continuous joint, which a table holds as revolute -360..360 deg.
+    continuous = {j.name for j in read_description(vendor).joints if j.type == "continuous"}
+    assert all(d.field == "type" and d.joint in continuous for d in report.joint_differences), \
+        report.summary()
+    assert report.strict_ok == (not continuous)
     lower, upper = _description_limits(vendor, robot.table.joint_names)
     # The table file holds each limit as the shortest decimal that reads back bit for bit, or,
     # where none exists in degrees, the nearest (1 ulp).

@@ -150,8 +150,14 @@ def fit_corrections(table: DHTable, urdf: str | Path, base: str, tip: str,
     ``max_translation`` (m) or ``max_rotation`` (rad): the nominal table is then probably wrong
     (a sign, a twist, a length), and the message names the joint and the size.
     """
+    return fit_to_chain(table, read_chain(urdf, base, tip), max_translation, max_rotation)
+
+
+def fit_to_chain(table: DHTable, chain: URDFChain,
+                 max_translation: float = MAX_CORRECTION_TRANSLATION,
+                 max_rotation: float = MAX_CORRECTION_ROTATION) -> DHTable:
+    """:func:`fit_corrections` on a chain already read with :func:`read_chain`."""
     nominal = table.nominal()
-    chain = read_chain(urdf, base, tip)
     _check_matching_chain(nominal, chain)
     n = nominal.dof
 
@@ -372,11 +378,17 @@ def _check_size(table: DHTable, chain: URDFChain, index: int, C: NDArray[np.floa
                       "alpha, d, offset, direction) right?")
 
 
-def _verify(table: DHTable, chain: URDFChain) -> None:
+def chain_deviation(table: DHTable, chain: URDFChain, samples: int) -> tuple[float, float]:
+    """Largest (position m, rotation rad) difference between the table's FK and Pinocchio on
+    the chain, over q = 0 and ``samples`` joint vectors within the table's limits (seed 0)."""
     rng = np.random.default_rng(0)
-    Q = np.vstack([np.zeros(table.dof), table.random_q(200, rng)])
+    Q = np.vstack([np.zeros(table.dof), table.random_q(samples, rng)])
     position, rotation = pose_error(table.fk(Q), chain.reference.fk(Q))
-    worst = max(float(position.max()), float(rotation.max()))
+    return float(position.max()), float(rotation.max())
+
+
+def _verify(table: DHTable, chain: URDFChain) -> None:
+    worst = max(chain_deviation(table, chain, 200))
     if worst > DEFAULT_TOLERANCE:  # a bug, not a user error: the construction is exact
         raise DHError(f"{table.name}: the fitted table deviates from {chain.source} by "
                       f"{worst:.3e} (m or rad); expected at most {DEFAULT_TOLERANCE:.0e}")

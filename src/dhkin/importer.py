@@ -46,14 +46,28 @@ import yaml
 from numpy.typing import NDArray
 
 from dhkin.axes_to_dh import CLEAN, AxisRows, rows_from_axes
-from dhkin.description import CONTINUOUS_LIMIT, UNSUPPORTED_TYPES, Description, read_description
+from dhkin.description import (
+    CONTINUOUS_LIMIT,
+    UNSUPPORTED_TYPES,
+    Description,
+    DescriptionJoint,
+    read_description,
+)
 from dhkin.dh import DHTable, Joint
 from dhkin.errors import DHError, FamilyError, InputError, URDFError
-from dhkin.fit import URDFChain, fit_corrections, read_chain
+from dhkin.fit import URDFChain, chain_deviation, fit_to_chain, read_chain
 from dhkin.ik.family import BAND
-from dhkin.table_file import ANGLE_UNITS, LENGTH_UNITS, exact_rpy, parse_table, table_to_yaml
+from dhkin.table_file import (
+    ANGLE_UNITS,
+    LENGTH_UNITS,
+    UNITS_RULE,
+    exact_rpy,
+    parse_table,
+    table_to_yaml,
+    units_problem,
+)
 from dhkin.tolerances import DEFAULT_TOLERANCE
-from dhkin.transforms import invert, pose_error, rot_y, xyz_rpy_to_matrix
+from dhkin.transforms import invert, rot_y, xyz_rpy_to_matrix
 from dhkin.xml_text import NAME_RULE, name_problem
 
 #: Random joint vectors (plus q = 0) on which the written table is checked (fixed seed 0).
@@ -142,12 +156,12 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
         pairs = ", ".join(f"{k + 1}-{k + 2}" for k in rows.near_parallel)
         notes.append(f"axes {pairs} are within the band of parallel but not parallel: nominal "
                      "DH rows with fitted corrections")
-        table = _corrected(table, description.text, base, tip)
+        table = _corrected(table, chain)
     table = _clean(table, units)
     table = replace(table, source=_source(description, base, tip, notes))
     written = parse_table(yaml.safe_load(table_to_yaml(table, units)),
                           source=description.source)
-    deviation = _deviation(written, chain)
+    deviation = chain_deviation(written, chain, VERIFY_SAMPLES)
     if max(deviation) > DEFAULT_TOLERANCE:
         raise DHError(f"{description.source}: the imported table deviates from the description "
                       f"by {deviation[0]:.3e} m / {deviation[1]:.3e} rad over {VERIFY_SAMPLES} "
@@ -166,11 +180,10 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
 
 def _check_units(units: Mapping[str, str] | None) -> dict[str, str]:
     chosen = {"length": "m", "angle": "deg"} if units is None else dict(units)
-    if set(chosen) != {"length", "angle"} or chosen["length"] not in LENGTH_UNITS \
-            or chosen["angle"] not in ANGLE_UNITS:
-        raise InputError(f"units: expected {{'length': one of {list(LENGTH_UNITS)}, 'angle': one "
-                         f"of {list(ANGLE_UNITS)}}}, got {dict(chosen)!r}", field="units",
-                         value=dict(chosen), expected="length m|mm, angle deg|rad")
+    problem = units_problem(chosen)
+    if problem is not None:
+        raise InputError(f"units: {problem}", field="units", value=chosen,
+                         expected=UNITS_RULE)
     return chosen
 
 
@@ -184,7 +197,7 @@ def _default_tip(description: Description) -> str:
 
 
 def _chain_joints(description: Description, base: str, tip: str
-                  ) -> tuple[list, list[str]]:
+                  ) -> tuple[list[DescriptionJoint], list[str]]:
     """The actuated joints on the path base -> tip, and the description's joints left out
     (with why). URDFError for a floating, planar or mimic joint on the path."""
     path = description.path(base, tip)
@@ -219,7 +232,8 @@ def _chain_joints(description: Description, base: str, tip: str
 # The table
 
 
-def _table(description: Description, chain: URDFChain, joints: list, rows: AxisRows,
+def _table(description: Description, chain: URDFChain, joints: list[DescriptionJoint],
+           rows: AxisRows,
            convention: str, name: str | None, base: str, tip: str) -> DHTable:
     table_joints = []
     for i, joint in enumerate(joints):
@@ -271,18 +285,17 @@ def _flange(description: Description, base: str, tip: str, frame_n: NDArray[np.f
     return tool @ TOOL0_TO_FLANGE
 
 
-def _corrected(table: DHTable, text: str, base: str, tip: str) -> DHTable:
-    """The nominal table (the family's ideal model when one fits within the band) with fitted
-    corrections."""
+def _corrected(table: DHTable, chain: URDFChain) -> DHTable:
+    """The nominal table (the family's ideal model when one fits within the band) with
+    corrections fitted to the chain."""
     from dhkin.ik.family import fit_family, ideal_model
 
-    first = fit_corrections(table, text, base, tip)
+    first = fit_to_chain(table, chain)
     try:
         fit_family(first)
     except FamilyError:
         return first
-    ideal = ideal_model(first)
-    return fit_corrections(ideal, text, base, tip)
+    return fit_to_chain(ideal_model(first), chain)
 
 
 def _clean(table: DHTable, units: Mapping[str, str]) -> DHTable:
@@ -327,13 +340,6 @@ def _source(description: Description, base: str, tip: str, notes: list[str]) -> 
     text = (f"Imported with `dhkin import` from {description.source} ({base} -> {tip}): the "
             "description's zero pose, joint and link names, limits, velocities and efforts")
     return text + "".join(f"; {note}" for note in notes) + "."
-
-
-def _deviation(table: DHTable, chain: URDFChain) -> tuple[float, float]:
-    rng = np.random.default_rng(0)
-    Q = np.vstack([np.zeros(table.dof), table.random_q(VERIFY_SAMPLES, rng)])
-    position, rotation = pose_error(table.fk(Q), chain.reference.fk(Q))
-    return float(position.max()), float(rotation.max())
 
 
 def _family(table: DHTable) -> tuple[str | None, str, bool]:

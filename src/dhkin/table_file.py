@@ -344,9 +344,9 @@ def table_to_yaml(table: DHTable, units: Mapping[str, str] | None = None,
     base, tool and flange always. ``header`` (optional) is written first as ``#`` comment lines.
     """
     units = dict(EXACT_UNITS if units is None else units)
-    if set(units) != {"length", "angle"} or units["length"] not in LENGTH_UNITS \
-            or units["angle"] not in ANGLE_UNITS:
-        raise DHError(f"units: expected {{'length': m|mm, 'angle': rad|deg}}, got {units!r}")
+    problem = units_problem(units)
+    if problem is not None:
+        raise DHError(f"units: {problem}", field="units", value=units, expected=UNITS_RULE)
     length_scale = LENGTH_UNITS[units["length"]]
     angle_scale = ANGLE_UNITS[units["angle"]]
 
@@ -414,6 +414,19 @@ def _yaml_number(value: float) -> str:
         mantissa, exponent = text.split("e")
         text = f"{mantissa}.0e{exponent}"
     return text
+
+
+#: What :func:`units_problem` accepts.
+UNITS_RULE = "{'length': m|mm, 'angle': rad|deg}"
+
+
+def units_problem(units: Mapping[str, str]) -> str | None:
+    """What is wrong with a units mapping for :func:`table_to_yaml` (``"expected ..., got
+    ..."``), or None when it is {"length": m|mm, "angle": rad|deg}."""
+    if set(units) != {"length", "angle"} or units["length"] not in LENGTH_UNITS \
+            or units["angle"] not in ANGLE_UNITS:
+        return f"expected {UNITS_RULE}, got {dict(units)!r}"
+    return None
 
 
 def _scaled_number(value: float, scale: float) -> str:

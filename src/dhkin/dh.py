@@ -165,7 +165,7 @@ class DHTable:
     def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
         """A_i(q) @ C_i for every joint (C_i: the joint's correction, identity without one):
         (N, n) joint values -> (N, n, 4, 4)."""
-        Q = _as_batch(q, self.dof)
+        Q, _ = joint_batch(q, self.dof)
         theta, d = self.dh_parameters(Q)
         a = np.array([j.a for j in self.joints])
         alpha = np.array([j.alpha for j in self.joints])
@@ -191,8 +191,7 @@ class DHTable:
 
     def fk(self, q: ArrayLike) -> NDArray[np.float64]:
         """base_link -> tool0. q: (n,) -> (4, 4); (N, n) -> (N, 4, 4)."""
-        Q = np.asarray(q, dtype=float)
-        single = Q.ndim == 1
+        Q, single = joint_batch(q, self.dof)
         A = self.link_transforms(Q)
         T = np.broadcast_to(self.base, (A.shape[0], 4, 4)).copy()
         for i in range(self.dof):
@@ -244,13 +243,57 @@ def _default_flange() -> NDArray[np.float64]:
     return xyz_rpy_to_matrix((0, 0, 0), np.radians(DEFAULT_FLANGE_RPY_DEG))
 
 
-def _as_batch(q: ArrayLike, dof: int) -> NDArray[np.float64]:
-    Q = np.asarray(q, dtype=float)
-    if Q.ndim == 1:
+#: numpy kinds a joint value may have: signed and unsigned integers, floats, and Python objects
+#: that convert to float (Decimal, Fraction). Booleans, complex numbers, text, bytes and dates
+#: are refused rather than converted: numpy would read True as 1 and "1.5" as 1.5, hiding a
+#: caller's mistake.
+JOINT_VALUE_KINDS = "iufO"
+
+
+def joint_batch(q: ArrayLike, dof: int, field: str = "q") -> tuple[NDArray[np.float64], bool]:
+    """Joint values ``q`` of shape (dof,) or (N, dof) -> finite float64 (N, dof), and whether a
+    single vector was given. The one check of joint values (robot, reference, singularity, maps):
+    an InputError naming ``field`` unless ``q`` holds finite real numbers of one of those shapes
+    (one line, naming the shape or type given, not every value)."""
+    Q = _real_array(q, field, f"finite numbers of shape ({dof},) or (N, {dof})")
+    single = Q.ndim == 1
+    if single:
         Q = Q[None, :]
     if Q.ndim != 2 or Q.shape[1] != dof:
-        raise InputError(field="q", value=np.shape(q), expected=f"shape ({dof},) or (N, {dof})")
+        raise InputError(field=field, value=np.shape(q),
+                         expected=f"shape ({dof},) or (N, {dof})")
     if not np.all(np.isfinite(Q)):
-        raise InputError("q: expected finite joint values, got NaN or inf", field="q",
+        raise InputError(f"{field}: expected finite joint values, got NaN or inf", field=field,
                          expected="finite joint values")
+    return Q, single
+
+
+def joint_vector(q: ArrayLike, dof: int, field: str = "q") -> NDArray[np.float64]:
+    """One joint vector ``q`` -> finite float64 (dof,); InputError naming ``field`` otherwise
+    (the single-configuration twin of :func:`joint_batch`)."""
+    expected = f"{dof} finite joint values (shape ({dof},))"
+    Q = _real_array(q, field, expected)
+    if Q.shape != (dof,):
+        raise InputError(f"{field}: expected {expected}, got shape {Q.shape}", field=field,
+                         value=Q.shape, expected=expected)
+    if not np.all(np.isfinite(Q)):
+        raise InputError(f"{field}: expected {expected}, got {Q.tolist()!r}", field=field,
+                         value=Q.tolist(), expected=expected)
     return Q
+
+
+def _real_array(q: ArrayLike, field: str, expected: str) -> NDArray[np.float64]:
+    """``q`` as a float64 array of any shape; InputError unless its values are real numbers of
+    a kind in :data:`JOINT_VALUE_KINDS` (text, bool, complex, None, ragged lists are refused)."""
+    if isinstance(q, (str, bytes)):
+        raise InputError(f"{field}: expected {expected}, got text {str(q)[:40]!r}", field=field,
+                         value=type(q).__name__, expected=expected)
+    try:
+        raw = np.asarray(q)
+        if raw.dtype.kind not in JOINT_VALUE_KINDS:
+            raise TypeError(f"values of type {raw.dtype}")
+        return raw.astype(np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        what = " ".join(str(exc).split())[:100]
+        raise InputError(f"{field}: expected {expected}, got {what}", field=field,
+                         value=type(q).__name__, expected=expected) from exc

@@ -29,6 +29,14 @@ def check_tolerance(tolerance: Any) -> float:
     return value
 
 
+def check_flag(value: Any, field: str) -> bool:
+    """``value`` as a bool; InputError unless it is one (a string such as "no" would read as
+    True)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(field=field, value=value, expected="True or False")
+    return bool(value)
+
+
 def as_targets(T: ArrayLike) -> tuple[NDArray[np.float64], bool]:
     """Poses (4, 4) or (N, 4, 4) as C-contiguous float64 (N, 4, 4) and whether one was given."""
     try:

@@ -26,7 +26,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                   "dhkin.validate", "dhkin.validate.*", "dhkin.compare",
                   "dhkin.importer")),
     ("facade", ("dhkin.robot",)),
-    ("application", ("dhkin", "dhkin.checks", "dhkin.cli")),
+    ("application", ("dhkin", "dhkin.checks", "dhkin.cli", "dhkin.cli_input")),
 )
 
 

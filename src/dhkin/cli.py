@@ -5,18 +5,31 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from dhkin.cli_input import (
+    EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE,
+    EXIT_FAILED,
+    EXIT_OK,
+    Parser,
+    finite_float,
+    input_error_text,
+    non_negative_float,
+    non_negative_int,
+    positive_float,
+    positive_int,
+    xacro_arguments,
+)
 from dhkin.errors import DhkinError, InputError
 from dhkin.robot import Robot, builtin_dir, builtin_names, load
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import matrix_to_rpy, xyz_rpy_to_matrix
-
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def _robot_arg(parser: argparse.ArgumentParser) -> None:
@@ -93,7 +106,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     result = import_description(args.description, base=args.base, tip=args.tip,
                                 convention=args.convention,
                                 units={"length": args.length, "angle": args.angle},
-                                xacro_args=_xacro_arguments(args.xacro_arg), name=args.name)
+                                xacro_args=xacro_arguments(args.xacro_arg), name=args.name)
     partial = output.with_name(f".{output.name}.partial")
     try:
         partial.write_text(result.yaml(), encoding="utf-8")
@@ -105,18 +118,6 @@ def cmd_import(args: argparse.Namespace) -> int:
     print(result.summary())
     print(f"wrote {output}")
     return EXIT_OK
-
-
-def _xacro_arguments(values: Sequence[str] | None) -> dict[str, str]:
-    """``NAME:=VALUE`` strings -> {NAME: VALUE} (InputError naming a malformed one)."""
-    arguments = {}
-    for value in values or ():
-        name, separator, text = value.partition(":=")
-        if not separator or not name:
-            raise InputError(f"--xacro-arg {value!r}: expected NAME:=VALUE", field="xacro-arg",
-                             value=value, expected="NAME:=VALUE")
-        arguments[name] = text
-    return arguments
 
 
 def _angles(values: Sequence[float], degrees: bool) -> np.ndarray:
@@ -155,16 +156,23 @@ def cmd_fk(args: argparse.Namespace) -> int:
 
 
 def _target(args: argparse.Namespace) -> np.ndarray:
+    """The target of `dhkin ik`: --matrix FILE or --xyz [--rpy] (argparse allows one of them)."""
     if args.matrix is not None:
+        if args.rpy is not None:
+            raise InputError("--rpy: applies to --xyz, not to --matrix (whose pose has its own "
+                             "rotation); expected --xyz X Y Z --rpy R P Y or --matrix FILE alone",
+                             field="rpy", value=args.rpy, expected="no --rpy with --matrix")
         try:
-            T = np.loadtxt(args.matrix, dtype=float)
-        except (OSError, ValueError) as exc:
-            raise DhkinError(f"{args.matrix}: expected a 4x4 matrix of numbers ({exc})") from exc
+            T = np.loadtxt(args.matrix, dtype=float, ndmin=2)
+        except ValueError as exc:  # includes a file that is not UTF-8 text
+            raise InputError(f"--matrix {args.matrix}: expected a 4x4 matrix of numbers "
+                             f"({exc})", field="matrix", value=args.matrix,
+                             expected="a 4x4 matrix of numbers") from exc
         if T.shape != (4, 4):
-            raise DhkinError(f"{args.matrix}: expected a 4x4 matrix, got shape {T.shape}")
+            raise InputError(f"--matrix {args.matrix}: expected a 4x4 matrix, got shape "
+                             f"{T.shape}", field="matrix", value=args.matrix,
+                             expected="a 4x4 matrix")
         return T
-    if args.xyz is None:
-        raise DhkinError("ik: give the target as --xyz X Y Z [--rpy R P Y] or --matrix FILE")
     rpy = _angles(args.rpy if args.rpy is not None else [0, 0, 0], args.deg)
     return xyz_rpy_to_matrix(args.xyz, rpy)
 
@@ -271,12 +279,14 @@ def _add_singularity_arguments(parser: argparse.ArgumentParser) -> None:
     from dhkin.singularity import DEFAULT_THRESHOLDS, DISTANCE_UNITS, KINDS
 
     _robot_arg(parser)
-    parser.add_argument("q", type=float, nargs="+", help="joint values (rad and m, or --deg)")
+    parser.add_argument("q", type=finite_float, nargs="+",
+                        help="joint values (rad and m, or --deg)")
     parser.add_argument("--deg", action="store_true", help="revolute joint values in degrees")
     for kind in KINDS:
-        parser.add_argument(f"--{kind}", type=float, default=DEFAULT_THRESHOLDS.of(kind),
-                            metavar="T", help=f"{kind} threshold ({DISTANCE_UNITS[kind]}, "
-                                              f"default {DEFAULT_THRESHOLDS.of(kind):g})")
+        parser.add_argument(f"--{kind}", type=non_negative_float,
+                            default=DEFAULT_THRESHOLDS.of(kind), metavar="T",
+                            help=f"{kind} threshold ({DISTANCE_UNITS[kind]}, "
+                                 f"default {DEFAULT_THRESHOLDS.of(kind):g})")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
@@ -306,18 +316,19 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, help="PNG file to write")
     parser.add_argument("--plane", choices=sorted(PLANES), default="xz",
                         help="workspace slice plane of base_link (default xz)")
-    parser.add_argument("--offset", type=float, default=0.0,
+    parser.add_argument("--offset", type=finite_float, default=0.0,
                         help="the plane's third coordinate (m, default 0)")
-    parser.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
+    parser.add_argument("--rpy", type=finite_float, nargs=3, metavar=("R", "P", "Y"),
                         help="tool0 orientation, URDF rpy (rad, or --deg); default per family: "
                              "tool0 z along +x (spherical wrist, Stanford), horizontal at "
                              "45 deg to the slice (offset wrist)")
-    parser.add_argument("--q", type=float, nargs="+", metavar="Q",
+    parser.add_argument("--q", type=finite_float, nargs="+", metavar="Q",
                         help="joint values held fixed in the joint slices (rad and m, or --deg)")
     parser.add_argument("--deg", action="store_true", help="angles of --rpy and --q in degrees")
-    parser.add_argument("--resolution", type=int, default=DEFAULT_RESOLUTION,
+    parser.add_argument("--resolution", type=positive_int, default=DEFAULT_RESOLUTION,
                         help=f"workspace grid cells per side (default {DEFAULT_RESOLUTION})")
-    parser.add_argument("--joint-resolution", type=int, default=DEFAULT_JOINT_RESOLUTION,
+    parser.add_argument("--joint-resolution", type=positive_int,
+                        default=DEFAULT_JOINT_RESOLUTION,
                         help=f"joint grid cells per side (default {DEFAULT_JOINT_RESOLUTION})")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -341,7 +352,7 @@ def cmd_map(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="dhkin", description="Kinematics of serial arms from DH tables, checked against "
                                   "Pinocchio. ROBOT is a built-in name or a path to a table.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -366,9 +377,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--base-frame", default="base_link", help="base frame in the other URDF")
     p.add_argument("--tip", default="tool0", help="tip frame in the other URDF")
     p.add_argument("--robot-tip", default="tool0", help="tip frame of our URDF")
-    p.add_argument("-n", type=int, default=1000, help="joint vectors to sample (default 1000)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+    p.add_argument("-n", type=positive_int, default=1000,
+                   help="joint vectors to sample (default 1000)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
+    p.add_argument("--tolerance", type=positive_float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
     p.add_argument("--strict", action="store_true",
                    help="also fail (exit 1) on any difference of joint names, types, limits or "
@@ -393,7 +405,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("fk", help="forward kinematics base_link -> tool0 (or --frame)")
     _robot_arg(p)
-    p.add_argument("q", type=float, nargs="+", help="joint values (rad and m, or --deg)")
+    p.add_argument("q", type=finite_float, nargs="+", help="joint values (rad and m, or --deg)")
     p.add_argument("--deg", action="store_true", help="revolute values and rpy in degrees")
     p.add_argument("--frame", default="tool0", help="frame of the generated URDF")
     p.set_defaults(run=cmd_fk)
@@ -401,11 +413,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("ik", help="the IK solutions of a pose: one per branch, its in-limit "
                                   "2pi copy nearest the seed (every copy: --all-copies)")
     _robot_arg(p)
-    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"), help="position (m)")
-    p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
-                   help="URDF roll-pitch-yaw of tool0 (rad, or --deg)")
-    p.add_argument("--matrix", help="file with the 4x4 pose base_link -> tool0")
-    p.add_argument("--seed", type=float, nargs="+",
+    target = p.add_mutually_exclusive_group(required=True)
+    target.add_argument("--xyz", type=finite_float, nargs=3, metavar=("X", "Y", "Z"),
+                        help="position (m), with --rpy (default 0 0 0)")
+    target.add_argument("--matrix", help="file with the 4x4 pose base_link -> tool0")
+    p.add_argument("--rpy", type=finite_float, nargs=3, metavar=("R", "P", "Y"),
+                   help="URDF roll-pitch-yaw of tool0 (rad, or --deg; with --xyz only)")
+    p.add_argument("--seed", type=finite_float, nargs="+",
                    help="joint values: each branch's copy nearest them, and the free joints at "
                         "a singularity (default 0)")
     p.add_argument("--all-copies", action="store_true",
@@ -453,20 +467,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")
     p.add_argument("--all", action="store_true", help="check every built-in robot")
     p.add_argument("--reference-dir", help="folder of vendor URDFs (default ../shared/reference)")
-    p.add_argument("--ik-poses", type=int, default=10_000, help="IK poses per robot")
-    p.add_argument("--vendor-poses", type=int, default=None,
+    p.add_argument("--ik-poses", type=positive_int, default=10_000, help="IK poses per robot")
+    p.add_argument("--vendor-poses", type=positive_int, default=None,
                    help="IK poses per robot on its vendor URDF (default 2000)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
     p.set_defaults(run=cmd_check)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one subcommand. Every failure of the input (dhkin's errors, files that cannot be read
+    or written, text that is not UTF-8, input nested too deeply or too large for memory) is one
+    line on stderr, ``dhkin: error: ...``, and exit status 2; a reader of stdout that goes away
+    (``| head``) ends the command quietly."""
     args = build_parser().parse_args(argv)
     try:
-        return int(args.run(args))
-    except DhkinError as exc:
-        print(f"dhkin: error: {exc}", file=sys.stderr)
+        status = int(args.run(args))
+        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        return status
+    except BrokenPipeError:
+        # The recipe of the `signal` module's documentation: no further writes to the pipe.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return EXIT_BROKEN_PIPE
+    except (DhkinError, OSError, UnicodeDecodeError, RecursionError, MemoryError) as exc:
+        print(f"dhkin: error: {input_error_text(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
 

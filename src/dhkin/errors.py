@@ -39,11 +39,20 @@ class DhkinError(Exception):
                  index: int | None = None) -> None:
         if message is None:
             message = describe(field, value, expected, index)
-        super().__init__(message)
+        super().__init__(one_line(message))
         self.field = field
         self.value = value
         self.expected = expected
         self.index = index
+
+
+def one_line(message: str) -> str:
+    """``message`` on one line: text quoted from elsewhere (a parser's, Pinocchio's, xacro's
+    multi-line report) has its line breaks and their indentation turned into single spaces, so
+    every dhkin error prints as one line (a log line, the CLI's ``dhkin: error: ...``)."""
+    if "\n" not in message and "\r" not in message:
+        return message
+    return " ".join(part.strip() for part in message.splitlines() if part.strip())
 
 
 def describe(field: str | None, value: Any, expected: str | None,
@@ -90,4 +99,4 @@ ValidationInputError = InputError
 #: Every error class, for ``from dhkin.errors import *`` users and for the package's exports.
 __all__ = ["DHError", "DhkinError", "FamilyError", "IKInputError", "InputError",
            "RobotNotFoundError", "SingularityError", "URDFError", "UnreachableError",
-           "ValidationInputError", "describe"]
+           "ValidationInputError", "describe", "one_line"]

@@ -222,9 +222,9 @@ def _family_error(table: DHTable, found: list[str]) -> FamilyError:
     where = str(table.path) if table.path is not None else table.name
     hint = ""
     if table.corrected and not opw_problems(table.nominal()):
-        hint = "\n  (its nominal table, without the corrections, is an OPW arm)"
-    return FamilyError(f"{where}: not an OPW arm (no opw_kinematics parameters):\n  "
-                       + "\n  ".join(found) + hint, field="opw", value=found, expected=EXPECTED)
+        hint = " (its nominal table, without the corrections, is an OPW arm)"
+    return FamilyError(f"{where}: not an OPW arm (no opw_kinematics parameters): "
+                       + "; ".join(found) + hint, field="opw", value=found, expected=EXPECTED)
 
 
 # --------------------------------------------------------------------------------------------

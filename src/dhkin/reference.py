@@ -15,6 +15,11 @@ root link, which Pinocchio calls the universe).
 
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Literal
 
@@ -22,6 +27,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.description import UrdfOutline, outline_urdf
 from dhkin.dh import joint_batch, joint_vector
 from dhkin.errors import InputError, URDFError
 
@@ -92,10 +98,22 @@ class Reference:
 
     def __init__(self, urdf_text: str, tip: str = "tool0", base: str | None = None,
                  source: str = "<urdf>") -> None:
-        try:
-            self.model = pin.buildModelFromXML(urdf_text)
-        except Exception as exc:
-            raise URDFError(f"{source}: Pinocchio cannot build a model ({exc})") from exc
+        if not isinstance(urdf_text, str):
+            raise InputError(f"urdf_text: expected the URDF as text (str), got "
+                             f"{type(urdf_text).__name__}", field="urdf_text",
+                             value=type(urdf_text).__name__, expected="str")
+        #: The links and joints as written (checked to form one tree before Pinocchio reads it).
+        self.outline: UrdfOutline = outline_urdf(urdf_text, source)
+        with _captured_stderr() as urdfdom_report:
+            try:
+                self.model = pin.buildModelFromXML(urdf_text)
+            except Exception as exc:
+                failure: Exception | None = exc
+            else:
+                failure = None
+        if failure is not None:
+            raise URDFError(f"{source}: Pinocchio cannot build a model "
+                            f"({_urdfdom_cause(urdfdom_report) or failure})") from failure
         self.data = self.model.createData()
         self.source = source
         self.tip = tip
@@ -236,6 +254,44 @@ class Reference:
             sigma_min=sigma_min,
             condition=float(sigma[0] / sigma_min) if sigma_min > 0 else float("inf"),
         )
+
+
+class _Report:
+    """Text captured by :func:`_captured_stderr` (filled when the block ends)."""
+
+    text = ""
+
+
+@contextmanager
+def _captured_stderr() -> Iterator[_Report]:
+    """Capture what C++ code writes to file descriptor 2 during the block. urdfdom, which
+    Pinocchio parses URDFs with, writes the cause of a failure there ("Joint [j] is of type
+    REVOLUTE but it does not specify limits") and raises only "The XML stream does not contain
+    a valid URDF model". Without a usable descriptor 2 the block runs uncaptured."""
+    report = _Report()
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield report
+        return
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield report
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            capture.seek(0)
+            report.text = capture.read(65536).decode("utf-8", errors="replace")
+
+
+def _urdfdom_cause(report: _Report) -> str | None:
+    """urdfdom's first "Error:" line (the cause), or None."""
+    for line in report.text.splitlines():
+        if line.strip().startswith("Error:"):
+            return line.strip().removeprefix("Error:").strip()
+    return None
 
 
 def _yoshikawa(J: NDArray[np.float64]) -> float:

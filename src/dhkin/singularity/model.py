@@ -110,11 +110,11 @@ def family_fit(table: DHTable) -> FamilyFit:
         return fit_family(table)
     except FamilyError as exc:
         failed = exc.value if isinstance(exc.value, dict) else {}
-        lines = "\n  ".join(f"{family}: " + "; ".join(problems)
-                            for family, problems in failed.items())
+        lines = " | ".join(f"{family}: " + "; ".join(problems)
+                           for family, problems in failed.items())
         raise FamilyError(f"{table.name}: no analytic singularity family fits this table "
-                          f"(its numerical measures: robot.reference().manipulability(q)):"
-                          f"\n  {lines}", field="family", value=exc.value,
+                          f"(its numerical measures: robot.reference().manipulability(q)): "
+                          f"{lines}", field="family", value=exc.value,
                           expected=exc.expected) from exc
 
 

@@ -292,6 +292,8 @@ def _real_array(q: ArrayLike, field: str, expected: str) -> NDArray[np.float64]:
         raw = np.asarray(q)
         if raw.dtype.kind not in JOINT_VALUE_KINDS:
             raise TypeError(f"values of type {raw.dtype}")
+        if raw.dtype.kind == "O" and any(value is None for value in raw.flat):
+            raise TypeError("None among the values")  # numpy would read None as NaN
         return raw.astype(np.float64)
     except (TypeError, ValueError, OverflowError) as exc:
         what = " ".join(str(exc).split())[:100]

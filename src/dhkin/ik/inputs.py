@@ -22,7 +22,10 @@ def check_tolerance(tolerance: Any) -> float:
                                                                  np.integer)):
         raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
                          f"{tolerance!r}", field="tolerance")
-    value = float(tolerance)
+    try:
+        value = float(tolerance)
+    except OverflowError:  # an int beyond any float
+        value = math.inf
     if not (math.isfinite(value) and value > 0.0):
         raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
                          f"{tolerance!r}", field="tolerance")

@@ -564,6 +564,10 @@ def test_fuzz_joint_value_arguments() -> None:
             outcome(lambda J: np.all(np.isfinite(J)), reference.jacobian, q),
             outcome(lambda m: math.isfinite(m.yoshikawa), reference.manipulability, q),
             outcome(lambda r: r.sigma_min >= 0, robot.singularity, q),
+            outcome(lambda r: r.sigma_min >= 0, robot.singularity, np.full(6, 0.1),
+                    rng.choice([hostile_value(rng, 3),
+                                {rng.choice(["wrist", "elbow", "knee", 3, None]):
+                                 rng.choice(HOSTILE_SCALARS)}])),
         ]
     assert {"error", "result"} <= set(outcomes)
 
@@ -594,6 +598,22 @@ def test_fuzz_ik_and_compare_arguments() -> None:
                                 "tip"]): rng.choice([*HOSTILE_SCALARS, "", "no_frame"])}
         outcomes.append(outcome(no_check, compare_with_urdf, robot, UR5_URDF,
                                 **{"n": 3, **keywords}))
+    assert {"error", "result"} <= set(outcomes)
+
+
+def test_fuzz_map_arguments() -> None:
+    from dhkin.maps import joint_slice, workspace_slice
+
+    rng = random.Random(17)
+    robot = dhkin.load("ur5")
+    outcomes = []
+    for _ in range(30):
+        keyword = rng.choice(["offset", "rpy", "extent", "plane", "resolution"])
+        value = hostile_value(rng, {"rpy": 3, "extent": 2}.get(keyword, 1))
+        arguments = {"resolution": 8, keyword: value}
+        outcomes.append(outcome(no_check, workspace_slice, robot, **arguments))
+        outcomes.append(outcome(no_check, joint_slice, robot, q_fixed=hostile_value(rng, 6),
+                                resolution=8))
     assert {"error", "result"} <= set(outcomes)
 
 

@@ -264,7 +264,9 @@ def read_urdf_file(path: str | Path) -> str:
                         f"at offset {exc.start}); expected a URDF (XML text)",
                         field="urdf", value=str(file), expected="a URDF (XML text)") from exc
     except OSError as exc:
-        raise URDFError(f"{file}: cannot read URDF ({exc.strerror or exc})", field="urdf",
+        reason = ("no such URDF file" if isinstance(exc, FileNotFoundError)
+                  else exc.strerror or str(exc))
+        raise URDFError(f"{file}: cannot read URDF ({reason})", field="urdf",
                         value=str(file), expected="a readable URDF file") from exc
 
 

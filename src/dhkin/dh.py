@@ -255,7 +255,7 @@ def joint_batch(q: ArrayLike, dof: int, field: str = "q") -> tuple[NDArray[np.fl
     single vector was given. The one check of joint values (robot, reference, singularity, maps):
     an InputError naming ``field`` unless ``q`` holds finite real numbers of one of those shapes
     (one line, naming the shape or type given, not every value)."""
-    Q = _real_array(q, field, f"finite numbers of shape ({dof},) or (N, {dof})")
+    Q = real_array(q, field, f"finite numbers of shape ({dof},) or (N, {dof})")
     single = Q.ndim == 1
     if single:
         Q = Q[None, :]
@@ -272,7 +272,7 @@ def joint_vector(q: ArrayLike, dof: int, field: str = "q") -> NDArray[np.float64
     """One joint vector ``q`` -> finite float64 (dof,); InputError naming ``field`` otherwise
     (the single-configuration twin of :func:`joint_batch`)."""
     expected = f"{dof} finite joint values (shape ({dof},))"
-    Q = _real_array(q, field, expected)
+    Q = real_array(q, field, expected)
     if Q.shape != (dof,):
         raise InputError(f"{field}: expected {expected}, got shape {Q.shape}", field=field,
                          value=Q.shape, expected=expected)
@@ -282,9 +282,10 @@ def joint_vector(q: ArrayLike, dof: int, field: str = "q") -> NDArray[np.float64
     return Q
 
 
-def _real_array(q: ArrayLike, field: str, expected: str) -> NDArray[np.float64]:
-    """``q`` as a float64 array of any shape; InputError unless its values are real numbers of
-    a kind in :data:`JOINT_VALUE_KINDS` (text, bool, complex, None, ragged lists are refused)."""
+def real_array(q: ArrayLike, field: str, expected: str) -> NDArray[np.float64]:
+    """``q`` as a float64 array of any shape; InputError ("``field``: expected ``expected``, got
+    ...") unless its values are real numbers of a kind in :data:`JOINT_VALUE_KINDS` (text, bool,
+    complex, None, ragged lists are refused). Shape and finiteness are the caller's to check."""
     if isinstance(q, (str, bytes)):
         raise InputError(f"{field}: expected {expected}, got text {str(q)[:40]!r}", field=field,
                          value=type(q).__name__, expected=expected)

@@ -202,7 +202,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from dhkin.validate import (
+    from dhkin.validation import (
         adapt,
         load_ik,
         own_ik,

@@ -1,5 +1,5 @@
 """The IK under test as a callable ``ik(T) -> joint vectors``: adapters for degrees and other tool
-frames, dhkin's own IK, and ``module:function`` specs (see :mod:`dhkin.validate.run`).
+frames, dhkin's own IK, and ``module:function`` specs (see :mod:`dhkin.validation.run`).
 """
 
 from __future__ import annotations

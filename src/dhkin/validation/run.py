@@ -77,10 +77,10 @@ from dhkin.arm import Arm
 from dhkin.errors import DhkinError, FamilyError, InputError
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
-from dhkin.validate.adapters import IKCallable, _call, _takes_seed, own_ik
-from dhkin.validate.references import ReferenceSpec, TargetModel, target_model
-from dhkin.validate.report import OUTCOMES, SampleResult, ValidationReport
-from dhkin.validate.samples import (
+from dhkin.validation.adapters import IKCallable, _call, _takes_seed, own_ik
+from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
+from dhkin.validation.report import OUTCOMES, SampleResult, ValidationReport
+from dhkin.validation.samples import (
     CONTINUITY_DISTANCE,
     CONTINUITY_SETS,
     SEED_PERTURBATION,

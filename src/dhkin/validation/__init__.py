@@ -1,16 +1,16 @@
 """Cross-validation of any IK callable against an oracle: Pinocchio on a reference description
-(:mod:`.run` documents what is checked). Every public name is importable from ``dhkin.validate``.
+(:mod:`.run` documents what is checked). Every public name is importable from ``dhkin.validation``.
 """
 
 from __future__ import annotations
 
-from dhkin.validate.adapters import (
+from dhkin.validation.adapters import (
     IKCallable,
     adapt,
     load_ik,
     own_ik,
 )
-from dhkin.validate.references import (
+from dhkin.validation.references import (
     REFERENCE_KINDS,
     ROUNDED_DIGITS,
     ReferenceSpec,
@@ -20,7 +20,7 @@ from dhkin.validate.references import (
     target_model,
     tool_frame_from_robot,
 )
-from dhkin.validate.report import (
+from dhkin.validation.report import (
     COMPLETENESS_OUTCOMES,
     OUTCOMES,
     SAMPLE_SETS,
@@ -28,7 +28,7 @@ from dhkin.validate.report import (
     ValidationReport,
     write_failures,
 )
-from dhkin.validate.run import (
+from dhkin.validation.run import (
     POSE_ROUNDING,
     SINGULAR_FAMILY_FIXED_JOINTS,
     WRIST_SINGULAR,
@@ -36,7 +36,7 @@ from dhkin.validate.run import (
     replay,
     validate,
 )
-from dhkin.validate.samples import (
+from dhkin.validation.samples import (
     CONTINUITY_DISTANCE,
     CONTINUITY_SETS,
     NEAR_SINGULAR_MAX,

@@ -55,9 +55,14 @@ MAX_SOLUTIONS_PER_CALL = 100_000
 DEFAULT_CALL_TIMEOUT = 300.0
 
 
-#: Seconds an isolated run waits for a new child process to answer its first call, on top of the
-#: call's own time limit (starting Python and importing numpy/Pinocchio in the child).
+#: Seconds an isolated run waits for a new child process to be ready, before and apart from the
+#: call's own time limit: a forked child is ready at once; a spawned one (where fork is not
+#: available) starts Python and imports numpy, Pinocchio and the IK's module first.
 CHILD_START_GRACE = 60.0
+
+
+#: What an isolated child sends once it is ready for calls.
+_READY = "ready"
 
 
 @dataclass
@@ -228,7 +233,9 @@ def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray
 
 
 def _child_main(connection: Any, ik: Any, robot: Arm, limit: int) -> None:
-    """The isolated child: answer (T, q_seed) requests until told to stop (None)."""
+    """The isolated child: say it is ready, then answer (T, q_seed) requests until told to stop
+    (None)."""
+    connection.send(_READY)
     while True:
         try:
             request = connection.recv()
@@ -253,16 +260,25 @@ class IsolatedCaller:
         self._ik, self._robot, self._timeout, self._limit = ik, robot, timeout, limit
         self._process: Any = None
         self._connection: Any = None
-        self._fresh = True
 
-    def _start(self) -> None:
+    def _start(self) -> str:
+        """Start a child and wait for it to be ready; '' or why it could not start."""
         parent, child = self._context.Pipe()
         self._process = self._context.Process(
             target=_child_main, args=(child, self._ik, self._robot, self._limit), daemon=True)
         self._process.start()
         child.close()
         self._connection = parent
-        self._fresh = True
+        try:
+            if parent.poll(CHILD_START_GRACE) and parent.recv() == _READY:
+                return ""
+        except (EOFError, OSError):
+            pass
+        self._process.join(timeout=1.0)
+        code = self._process.exitcode
+        self._stop()
+        return (f"the IK's process did not start within {CHILD_START_GRACE:g} s "
+                f"({_exit_text(code)})")
 
     def _stop(self) -> None:
         if self._process is None:
@@ -275,17 +291,16 @@ class IsolatedCaller:
 
     def __call__(self, T: NDArray[np.float64], q_seed: NDArray[np.float64]) -> CallResult:
         if self._process is None:
-            self._start()
-        wait = None if self._timeout is None else self._timeout + (
-            CHILD_START_GRACE if self._fresh else 0.0)
-        self._fresh = False
+            problem = self._start()
+            if problem:
+                return CallResult([], problem, "no_solution")
         try:
             self._connection.send((np.array(T, dtype=float), np.array(q_seed, dtype=float)))
-            if wait is not None and not self._connection.poll(wait):
+            if self._timeout is not None and not self._connection.poll(self._timeout):
                 self._stop()
-                return _timed_out(float(self._timeout or 0.0))
+                return _timed_out(self._timeout)
             stacked, problem, outcome = self._connection.recv()
-        except (EOFError, OSError, BrokenPipeError):
+        except (EOFError, OSError):
             self._process.join(timeout=5.0)
             code = self._process.exitcode
             self._stop()

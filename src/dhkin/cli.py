@@ -205,44 +205,31 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from dhkin.validation import (
         adapt,
         load_ik,
+        own_ik,
         replay,
         tool_frame_from_robot,
         validate,
         write_failures,
     )
-    from dhkin.validation import arguments as check
+    from dhkin.validation.arguments import check_command_line
 
-    if args.ik is None and (args.deg or args.ik_frame):
-        given = " and ".join(o for o, v in (("--deg", args.deg), ("--ik-frame", args.ik_frame))
-                             if v)
-        raise InputError(f"{given}: apply only to --ik module:function (they say how that IK "
-                         "answers); dhkin's own IK needs neither", field="--ik",
-                         expected="--ik with --deg / --ik-frame")
-    if args.replay is None:
-        check.sample_count(args.n, "-n")
-        check.seed_value(args.seed, "--seed")
-        check.tolerance_value(args.tolerance, "--tolerance")
-        check.joint_tolerance_value(args.joint_tolerance, "--joint-tolerance")
-    check.timeout_value(args.timeout, "--timeout")
+    check_command_line(args)
     robot = load(args.robot)
-    ik = None
+    ik, name = None, args.ik  # None: the robot's own IK, closed form or numerical, as the API
     if args.ik is None:
         family = robot.ik_solver.family if robot.has_closed_form else "numerical"
         name = f"dhkin's own IK ({family})"
     else:
-        ik, name = load_ik(args.ik), args.ik
+        ik = load_ik(args.ik)
         if args.deg or args.ik_frame:
             tool = tool_frame_from_robot(robot, args.ik_frame) if args.ik_frame else None
             ik = adapt(ik, degrees=args.deg, tool=tool)
     if args.replay:
-        from dhkin.validation import own_ik
-
         # The failure file names its reference; --reference/--base/--tip override it.
         report = replay(robot, own_ik(robot) if ik is None else ik, args.replay, ik_name=name,
                         reference=args.reference, base=args.base, tip=args.tip,
                         timeout=args.timeout, isolate=args.isolate)
     else:
-        # ik None: the robot's own IK, closed form or numerical, judged as dhkin.validate does.
         report = validate(robot, ik, n=args.n, seed=args.seed, tolerance=args.tolerance,
                           joint_tolerance=args.joint_tolerance, progress=sys.stderr.isatty(),
                           ik_name=name, reference=args.reference, base=args.base,
@@ -445,17 +432,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
     p.add_argument("--joint-tolerance", type=float, default=DEFAULT_JOINT_TOLERANCE,
-                   help="rad (m for prismatic joints): when a returned solution is the sampled "
-                        f"q or a branch (default {DEFAULT_JOINT_TOLERANCE:g})")
-    p.add_argument("--deg", action="store_true", help="the --ik IK returns degrees (and takes "
-                                                      "its q_seed in degrees)")
+                   help=f"rad / m: same joint vector (default {DEFAULT_JOINT_TOLERANCE:g})")
+    p.add_argument("--deg", action="store_true", help="the --ik IK works in degrees")
     p.add_argument("--ik-frame", help="the --ik IK solves for this frame of our URDF, not tool0")
-    p.add_argument("--timeout", type=float, default=DEFAULT_CALL_TIMEOUT,
-                   help="time limit of one IK call in seconds; a call over it is a failure of "
-                        f"its pose (default {DEFAULT_CALL_TIMEOUT:g})")
-    p.add_argument("--isolate", action="store_true",
-                   help="call the IK in a child process, so that a crash (segfault) or a hang "
-                        "it swallows is a failure of its pose, not the end of the run")
+    p.add_argument("--timeout", type=float, default=DEFAULT_CALL_TIMEOUT, help="seconds per IK "
+                   f"call, else a failure of its pose (default {DEFAULT_CALL_TIMEOUT:g})")
+    p.add_argument("--isolate", action="store_true", help="call the IK in a child process: a "
+                   "crash or a hang it swallows fails its pose, not the run")
     p.add_argument("--json", help="write the report as JSON to this file")
     p.add_argument("--report", help="write the report as Markdown to this file")
     p.add_argument("--failures", help="failure file (default <robot>_ik_failures.json)")

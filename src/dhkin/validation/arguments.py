@@ -142,3 +142,21 @@ def optional_text(value: Any, name: str) -> str | None:
     if value is not None and not isinstance(value, str):
         raise _fail(name, value, "a string or None")
     return value
+
+
+def check_command_line(options: Any) -> None:
+    """The options of ``dhkin validate`` (an argparse namespace), named as on the command line:
+    --deg and --ik-frame need --ik; the numbers as :func:`validate` checks them (-n, --seed and
+    the tolerances only without --replay, whose file records its own)."""
+    if options.ik is None and (options.deg or options.ik_frame):
+        given = " and ".join(o for o, v in (("--deg", options.deg),
+                                            ("--ik-frame", options.ik_frame)) if v)
+        raise InputError(f"{given}: apply only to --ik module:function (they say how that IK "
+                         "answers); dhkin's own IK needs neither", field="--ik",
+                         expected="--ik with --deg / --ik-frame")
+    if options.replay is None:
+        sample_count(options.n, "-n")
+        seed_value(options.seed, "--seed")
+        tolerance_value(options.tolerance, "--tolerance")
+        joint_tolerance_value(options.joint_tolerance, "--joint-tolerance")
+    timeout_value(options.timeout, "--timeout")

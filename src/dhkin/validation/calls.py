@@ -25,6 +25,7 @@ never the validator's crash, exit or hang.
 from __future__ import annotations
 
 import contextlib
+import faulthandler
 import inspect
 import multiprocessing
 import signal
@@ -234,7 +235,9 @@ def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray
 
 def _child_main(connection: Any, ik: Any, robot: Arm, limit: int) -> None:
     """The isolated child: say it is ready, then answer (T, q_seed) requests until told to stop
-    (None)."""
+    (None). Python's fault handler is off here: a crash is the parent's to report, as a failure
+    of the pose, not a stack dump on the terminal."""
+    faulthandler.disable()
     connection.send(_READY)
     while True:
         try:

@@ -42,13 +42,13 @@ from dhkin.validation.report import (
     ValidationReport,
     write_failures,
 )
+from dhkin.validation.rerun import replay
 from dhkin.validation.run import (
     DEFAULT_JOINT_TOLERANCE,
     POSE_ROUNDING,
     SINGULAR_FAMILY_FIXED_JOINTS,
     WRIST_SINGULAR,
     _resolvable,
-    replay,
     validate,
 )
 from dhkin.validation.samples import (

@@ -49,6 +49,11 @@ from dhkin.validation.arguments import one_line
 MAX_SOLUTIONS_PER_CALL = 100_000
 
 
+#: Solutions kept of an answer that is not a list of joint vectors (too long, or with a bad item
+#: after good ones), for the failure file: enough to see what came back, not 100,000 per pose.
+KEPT_OF_A_BAD_ANSWER = 16
+
+
 #: Time limit of one IK call (s), reading its output included. Generous: dhkin's own IK answers
 #: in ~0.1 ms, but its first call compiles the numba kernels (15-41 s on an idle 2-core machine,
 #: several times that on a loaded one), and a slow numerical IK in Python may take seconds; five
@@ -152,11 +157,13 @@ def collect(result: Any, dof: int, limit: int = MAX_SOLUTIONS_PER_CALL) -> CallR
     solutions: list[NDArray[np.float64]] = []
     for index, item in enumerate(items):
         if index >= limit:
-            return CallResult(solutions, f"returned more than {limit} solutions "
-                                         "(MAX_SOLUTIONS_PER_CALL); stopped reading", "wrong")
+            return CallResult(solutions[:KEPT_OF_A_BAD_ANSWER],
+                              f"returned more than {limit} solutions (MAX_SOLUTIONS_PER_CALL); "
+                              "stopped reading", "wrong")
         vector, problem = _joint_vector(item, index, dof)
         if vector is None:
-            return CallResult(solutions, f"{problem}; {expected}", "wrong")
+            return CallResult(solutions[:KEPT_OF_A_BAD_ANSWER], f"{problem}; {expected}",
+                              "wrong")
         solutions.append(vector)
     return CallResult(solutions)
 

@@ -79,12 +79,10 @@ from dhkin.transforms import pose_error
 from dhkin.validation import arguments
 from dhkin.validation.adapters import IKCallable, own_ik
 from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, CallResult, IKCaller, takes_seed
-from dhkin.validation.failure_file import read_failure_file
 from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
 from dhkin.validation.report import OUTCOMES, SampleResult, ValidationReport
 from dhkin.validation.samples import (
     CONTINUITY_DISTANCE,
-    CONTINUITY_SETS,
     SEED_PERTURBATION,
     WRIST_JOINT,
     perturbed_seeds,
@@ -272,13 +270,19 @@ def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> It
     return tqdm(iterable, total=total, desc=label, unit="pose", leave=False, file=sys.stderr)
 
 
+#: Returned solutions a failure record keeps (per call): every 2pi copy of the 16 branches of
+#: a UR-type arm with +-360 deg joints (16 * 2^6), while an IK returning up to
+#: MAX_SOLUTIONS_PER_CALL rows on every pose cannot make the report hold gigabytes.
+FAILURE_SOLUTIONS_KEPT = 1024
+
+
 #: Default ``joint_tolerance`` (rad, m for prismatic joints) of the missing checks.
 DEFAULT_JOINT_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
-class _Settings:
-    """The checked arguments of one run."""
+class RunSettings:
+    """The checked arguments of one run (of :func:`validate` or :func:`~.rerun.replay`)."""
 
     seed: int
     tolerance: float
@@ -290,7 +294,7 @@ class _Settings:
     complete_expected: bool
 
 
-def _ik_name(ik: Any, given: str | None) -> str:
+def ik_name_of(ik: Any, given: str | None) -> str:
     if given is not None:
         return given
     try:
@@ -323,13 +327,13 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
                          f"dhkin's own), got {arguments.quoted(ik)}", field="ik",
                          value=arguments.quoted(ik), expected="a callable or None")
     n = arguments.sample_count(n)
-    settings = _Settings(
+    settings = RunSettings(
         seed=arguments.seed_value(seed), tolerance=arguments.tolerance_value(tolerance),
         joint_tolerance=arguments.joint_tolerance_value(joint_tolerance),
         timeout=arguments.timeout_value(timeout),
         isolate=bool(arguments.flag(isolate, "isolate")),
         progress=bool(arguments.flag(progress, "progress")),
-        ik_name=_ik_name(ik if ik is not None else own_ik(robot),
+        ik_name=ik_name_of(ik if ik is not None else own_ik(robot),
                          arguments.optional_text(ik_name, "ik_name")),
         complete_expected=(ik is not None or robot.has_closed_form
                            if arguments.flag(complete_expected, "complete_expected",
@@ -338,13 +342,13 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
     model = target_model(robot, reference, base, tip)
     callable_ik = own_ik(robot) if ik is None else ik
     q, sets = sample_joint_vectors(robot, n, settings.seed)
-    return _run(robot, model, callable_ik, q, sets,
+    return run_samples(robot, model, callable_ik, q, sets,
                 perturbed_seeds(robot, q, sets, settings.seed), settings)
 
 
-def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
+def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
          sets: list[str], perturbed: NDArray[np.float64],
-         settings: _Settings) -> ValidationReport:
+         settings: RunSettings) -> ValidationReport:
     started = time.perf_counter()
     targets = model.fk(q)
     labels = _configuration_labels(robot, targets, q)
@@ -366,7 +370,7 @@ def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
 
 def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.float64],
                sets: list[str], perturbed: NDArray[np.float64], targets: NDArray[np.float64],
-               labels: list[str], settings: _Settings, report: ValidationReport) -> None:
+               labels: list[str], settings: RunSettings, report: ValidationReport) -> None:
     """Call and check every sample; fill the report's counts, residuals and failures. The IK
     gets read-only copies (see :class:`IKCaller`): ``q``, ``targets`` and ``perturbed`` stay
     the validator's own, for the checks and the failure file."""
@@ -408,15 +412,19 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
             by_configuration.setdefault(labels[k], Counter())[outcome] += 1
         n_solutions.append(len(returned))
         if outcome != "success":
+            if max(len(returned), len(returned_perturbed)) > FAILURE_SOLUTIONS_KEPT:
+                detail += (f" (the failure keeps the first {FAILURE_SOLUTIONS_KEPT} of "
+                           f"{max(len(returned), len(returned_perturbed))} solutions)")
             report.failures.append(SampleResult(
                 index=k, sample_set=sets[k], q_sampled=q[k].tolist(), target=targets[k].tolist(),
-                returned=[r.tolist() for r in returned],
+                returned=[r.tolist() for r in returned[:FAILURE_SOLUTIONS_KEPT]],
                 position_errors=checked.position.tolist(),
                 rotation_errors=checked.rotation.tolist(), outcome=outcome, detail=detail,
                 configuration=labels[k],
                 perturbed_seed=(perturbed[k].tolist() if np.all(np.isfinite(perturbed[k]))
                                 else []),
-                returned_perturbed=[r.tolist() for r in returned_perturbed],
+                returned_perturbed=[r.tolist()
+                                    for r in returned_perturbed[:FAILURE_SOLUTIONS_KEPT]],
                 missing_branches=missing))
     report.counts = {o: counts.get(o, 0) for o in OUTCOMES}
     report.by_set = {s: dict(c) for s, c in by_set.items()}
@@ -455,35 +463,3 @@ def _check_continuity(robot: Arm, model: TargetModel, caller: IKCaller, T: NDArr
                 f"nearest solution is {distance:.3f} from it on joint {joint + 1} (allowed "
                 f"{CONTINUITY_DISTANCE})", returned)
     return "success", "", returned
-
-
-def replay(robot: Arm, ik: IKCallable, path: str | Path, ik_name: str | None = None,
-           reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
-           tip: str | None = None, complete_expected: bool | None = None,
-           timeout: float | None = DEFAULT_CALL_TIMEOUT, isolate: bool = False
-           ) -> ValidationReport:
-    """Rerun the samples of a failure file with ``ik`` and check them again, on the reference
-    the file records (files without one: "exact") unless ``reference`` / ``base`` / ``tip``
-    say otherwise, with the recorded perturbed seeds. Every value of the file is checked
-    (:func:`~dhkin.validation.failure_file.read_failure_file`): a wrong one is an InputError
-    naming the file, the entry and the field."""
-    if not callable(ik):
-        raise InputError(f"ik: expected a callable ik(T) -> joint vectors, got "
-                         f"{arguments.quoted(ik)}", field="ik", value=arguments.quoted(ik),
-                         expected="a callable")
-    recorded = read_failure_file(path, robot)
-    if reference is None:
-        reference = recorded.reference
-    model = target_model(robot, reference, base, tip)
-    perturbed = perturbed_seeds(robot, recorded.q, recorded.sets, recorded.seed)
-    for k, row in enumerate(recorded.perturbed):
-        if row is not None and recorded.sets[k] in CONTINUITY_SETS:
-            perturbed[k] = row
-    expected = arguments.flag(complete_expected, "complete_expected", optional=True)
-    settings = _Settings(
-        seed=recorded.seed, tolerance=recorded.tolerance,
-        joint_tolerance=recorded.joint_tolerance, timeout=arguments.timeout_value(timeout),
-        isolate=bool(arguments.flag(isolate, "isolate")), progress=False,
-        ik_name=_ik_name(ik, arguments.optional_text(ik_name, "ik_name")),
-        complete_expected=recorded.complete_expected if expected is None else bool(expected))
-    return _run(robot, model, ik, recorded.q, recorded.sets, perturbed, settings)

@@ -35,6 +35,7 @@ from dhkin.validation import (
     validate,
     write_failures,
 )
+from dhkin.validation.calls import KEPT_OF_A_BAD_ANSWER
 
 from . import broken
 from .conftest import REPO
@@ -180,6 +181,7 @@ def test_an_endless_generator_is_stopped_at_the_limit(ur5: dhkin.Robot) -> None:
     report = validate(ur5, broken.endless, n=1, reference="exact")
     assert_reported(report, f"more than {MAX_SOLUTIONS_PER_CALL} solutions",
                     "MAX_SOLUTIONS_PER_CALL")
+    assert all(len(f.returned) == KEPT_OF_A_BAD_ANSWER for f in report.failures)
     assert time.perf_counter() - started < 20
 
 
@@ -484,7 +486,7 @@ class HostileIK:
         raise _Custom("not an Exception")
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", range(16))  # together they use every behaviour (2+ times)
 def test_fuzz_hostile_iks_are_reported_never_passed(ur5: dhkin.Robot, seed: int) -> None:
     n = 8
     ik = HostileIK(ur5, seed)

@@ -168,9 +168,13 @@ def collect(result: Any, dof: int, limit: int = MAX_SOLUTIONS_PER_CALL) -> CallR
     return CallResult(solutions)
 
 
-def _arguments(ik: Any, robot: Arm, T: NDArray[np.float64],
-               q_seed: NDArray[np.float64]) -> tuple[NDArray[np.float64], dict[str, Any]]:
-    declared = parameters(ik)
+def wanted(ik: Any) -> frozenset[str]:
+    """Which of the optional keywords ``q_seed`` and ``robot`` the IK declares."""
+    return frozenset(("q_seed", "robot")) & frozenset(parameters(ik))
+
+
+def _arguments(robot: Arm, T: NDArray[np.float64], q_seed: NDArray[np.float64],
+               declared: frozenset[str]) -> tuple[NDArray[np.float64], dict[str, Any]]:
     kwargs: dict[str, Any] = {}
     if "q_seed" in declared:
         kwargs["q_seed"] = read_only_copy(q_seed)
@@ -187,11 +191,11 @@ def _describe(exc: BaseException) -> str:
 
 
 def _run_guarded(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray[np.float64],
-                 limit: int) -> CallResult:
+                 limit: int, declared: frozenset[str]) -> CallResult:
     """Call and read the IK; every exception but KeyboardInterrupt and the timer's becomes the
     pose's problem."""
     try:
-        target, kwargs = _arguments(ik, robot, T, q_seed)
+        target, kwargs = _arguments(robot, T, q_seed, declared)
         return collect(ik(target, **kwargs), robot.dof, limit)
     except (KeyboardInterrupt, _CallTimedOut):
         raise
@@ -214,11 +218,15 @@ def _timed_out(timeout: float) -> CallResult:
 
 
 def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray[np.float64],
-                    timeout: float | None, limit: int = MAX_SOLUTIONS_PER_CALL) -> CallResult:
-    """One guarded call in this process (see the module docstring)."""
+                    timeout: float | None, limit: int = MAX_SOLUTIONS_PER_CALL,
+                    declared: frozenset[str] | None = None) -> CallResult:
+    """One guarded call in this process (see the module docstring); ``declared``: the IK's
+    :func:`wanted` keywords, if already known."""
+    if declared is None:
+        declared = wanted(ik)
     started = time.monotonic()
     if timeout is None or not _alarm_usable():
-        result = _run_guarded(ik, robot, T, q_seed, limit)
+        result = _run_guarded(ik, robot, T, q_seed, limit, declared)
         if timeout is not None and time.monotonic() - started > timeout:
             return _timed_out(timeout)
         return result
@@ -227,7 +235,7 @@ def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray
     try:
         try:
             previous_timer = signal.setitimer(signal.ITIMER_REAL, timeout)
-            return _run_guarded(ik, robot, T, q_seed, limit)
+            return _run_guarded(ik, robot, T, q_seed, limit, declared)
         finally:
             signal.setitimer(signal.ITIMER_REAL, 0.0)
     except _CallTimedOut:
@@ -245,6 +253,7 @@ def _child_main(connection: Any, ik: Any, robot: Arm, limit: int) -> None:
     (None). Python's fault handler is off here: a crash is the parent's to report, as a failure
     of the pose, not a stack dump on the terminal."""
     faulthandler.disable()
+    declared = wanted(ik)
     connection.send(_READY)
     while True:
         try:
@@ -254,7 +263,7 @@ def _child_main(connection: Any, ik: Any, robot: Arm, limit: int) -> None:
         if request is None:
             return
         T, q_seed = request
-        result = _run_guarded(ik, robot, T, q_seed, limit)
+        result = _run_guarded(ik, robot, T, q_seed, limit, declared)
         stacked = (np.array(result.solutions, dtype=float).reshape(-1, robot.dof)
                    if result.solutions else np.zeros((0, robot.dof)))
         connection.send((stacked, result.problem, result.outcome))
@@ -343,6 +352,7 @@ class IKCaller:
     def __init__(self, ik: Any, robot: Arm, timeout: float | None = DEFAULT_CALL_TIMEOUT,
                  isolate: bool = False, limit: int = MAX_SOLUTIONS_PER_CALL) -> None:
         self.ik, self.robot, self.timeout, self.limit = ik, robot, timeout, limit
+        self._declared = wanted(ik)
         self._isolated = IsolatedCaller(ik, robot, timeout, limit) if isolate else None
 
     def __call__(self, T: ArrayLike, q_seed: ArrayLike) -> CallResult:
@@ -350,7 +360,8 @@ class IKCaller:
         seed = np.asarray(q_seed, dtype=float)
         if self._isolated is not None:
             return self._isolated(target, seed)
-        return call_in_process(self.ik, self.robot, target, seed, self.timeout, self.limit)
+        return call_in_process(self.ik, self.robot, target, seed, self.timeout, self.limit,
+                               self._declared)
 
     def close(self) -> None:
         if self._isolated is not None:

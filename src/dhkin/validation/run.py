@@ -6,7 +6,8 @@ optional keyword parameters are honoured when the callable declares them: ``q_se
 joint vector is passed, so that a solver can pick free joints at a singularity from it) and
 ``robot`` (the robot under test: a :class:`dhkin.robot.Robot`, or any
 :class:`~dhkin.arm.Arm`). :func:`adapt` wraps an IK that works in degrees or for another tool
-frame.
+frame. Each call is guarded (:mod:`dhkin.validation.calls`): the IK gets read-only copies, and
+whatever it raises or returns, however long it runs, is a result of that pose.
 
 Samples (fixed seed): ``uniform`` joint vectors within the limits; ``special`` vectors whose
 joints take the special angles 0, +-pi/2, pi (those inside the limits); ``near_singular``

@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import json
 import math
+import multiprocessing
 import signal
 import sys
 import time
@@ -221,6 +222,13 @@ def test_isolated_calls_survive_a_crash_and_a_hang(ur5: dhkin.Robot) -> None:
     assert_reported(validate(ur5, broken.exits, n=1, isolate=True, reference="exact"),
                     "sys.exit(0)")
     assert validate(ur5, correct(ur5), n=N, isolate=True, reference="exact").ok
+
+
+def test_isolate_without_fork_needs_a_picklable_ik(ur5: dhkin.Robot, monkeypatch) -> None:
+    """Where only spawn exists, an IK that cannot be pickled is one clear error, not a crash."""
+    monkeypatch.setattr(multiprocessing, "get_all_start_methods", lambda: ["spawn"])
+    with pytest.raises(InputError, match=r"^isolate: cannot start the IK in a child process"):
+        validate(ur5, lambda T: [], n=1, isolate=True, reference="exact")
 
 
 def test_isolate_on_the_command_line(capsys, monkeypatch) -> None:

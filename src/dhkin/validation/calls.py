@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.arm import Arm
+from dhkin.errors import InputError
 from dhkin.validation.arguments import one_line
 
 #: Most solutions read from one IK call. A 6R arm has at most 16 branches; with every in-limit
@@ -285,7 +286,17 @@ class IsolatedCaller:
         parent, child = self._context.Pipe()
         self._process = self._context.Process(
             target=_child_main, args=(child, self._ik, self._robot, self._limit), daemon=True)
-        self._process.start()
+        try:
+            self._process.start()
+        except Exception as exc:  # spawn pickles the IK and the robot: a lambda cannot go
+            parent.close()
+            child.close()
+            self._process = None
+            raise InputError(
+                f"isolate: cannot start the IK in a child process ({type(exc).__name__}: "
+                f"{one_line(str(exc), 160)}); expected an IK the '{self._context.get_start_method()}' start "
+                "method can pass (a module-level function)", field="isolate",
+                expected="an IK a child process can receive") from exc
         child.close()
         self._connection = parent
         try:

@@ -292,9 +292,10 @@ class IsolatedCaller:
             parent.close()
             child.close()
             self._process = None
+            method = self._context.get_start_method()
             raise InputError(
                 f"isolate: cannot start the IK in a child process ({type(exc).__name__}: "
-                f"{one_line(str(exc), 160)}); expected an IK the '{self._context.get_start_method()}' start "
+                f"{one_line(str(exc), 160)}); expected an IK the {method!r} start "
                 "method can pass (a module-level function)", field="isolate",
                 expected="an IK a child process can receive") from exc
         child.close()

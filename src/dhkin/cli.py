@@ -18,7 +18,9 @@ from dhkin.cli_input import (
     EXIT_FAILED,
     EXIT_OK,
     Parser,
+    angles,
     finite_float,
+    ik_target,
     input_error_text,
     non_negative_float,
     non_negative_int,
@@ -29,7 +31,7 @@ from dhkin.cli_input import (
 from dhkin.errors import DhkinError, InputError
 from dhkin.robot import Robot, builtin_dir, builtin_names, load
 from dhkin.tolerances import DEFAULT_TOLERANCE
-from dhkin.transforms import matrix_to_rpy, xyz_rpy_to_matrix
+from dhkin.transforms import matrix_to_rpy
 
 
 def _robot_arg(parser: argparse.ArgumentParser) -> None:
@@ -120,11 +122,6 @@ def cmd_import(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _angles(values: Sequence[float], degrees: bool) -> np.ndarray:
-    array = np.asarray(values, dtype=float)
-    return np.radians(array) if degrees else array
-
-
 def _joint_values(robot: Robot, values: Sequence[float], degrees: bool,
                   field: str = "q") -> np.ndarray:
     """Joint values given on the command line (argument ``field``) -> SI; ``degrees`` converts
@@ -155,31 +152,9 @@ def cmd_fk(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _target(args: argparse.Namespace) -> np.ndarray:
-    """The target of `dhkin ik`: --matrix FILE or --xyz [--rpy] (argparse allows one of them)."""
-    if args.matrix is not None:
-        if args.rpy is not None:
-            raise InputError("--rpy: applies to --xyz, not to --matrix (whose pose has its own "
-                             "rotation); expected --xyz X Y Z --rpy R P Y or --matrix FILE alone",
-                             field="rpy", value=args.rpy, expected="no --rpy with --matrix")
-        try:
-            T = np.loadtxt(args.matrix, dtype=float, ndmin=2)
-        except ValueError as exc:  # includes a file that is not UTF-8 text
-            raise InputError(f"--matrix {args.matrix}: expected a 4x4 matrix of numbers "
-                             f"({exc})", field="matrix", value=args.matrix,
-                             expected="a 4x4 matrix of numbers") from exc
-        if T.shape != (4, 4):
-            raise InputError(f"--matrix {args.matrix}: expected a 4x4 matrix, got shape "
-                             f"{T.shape}", field="matrix", value=args.matrix,
-                             expected="a 4x4 matrix")
-        return T
-    rpy = _angles(args.rpy if args.rpy is not None else [0, 0, 0], args.deg)
-    return xyz_rpy_to_matrix(args.xyz, rpy)
-
-
 def cmd_ik(args: argparse.Namespace) -> int:
     robot = load(args.robot)
-    T = _target(args)
+    T = ik_target(args)
     seed = None if args.seed is None else _joint_values(robot, args.seed, args.deg)
     solutions = robot.ik(T, q_seed=seed, copies=args.all_copies)
     revolute = np.array([j.is_revolute for j in robot.table.joints])
@@ -345,7 +320,7 @@ def cmd_map(args: argparse.Namespace) -> int:
     robot = load(args.robot)
     rpy = None
     if args.rpy is not None:
-        rpy = [float(v) for v in _angles(args.rpy, bool(args.deg))]
+        rpy = [float(v) for v in angles(args.rpy, bool(args.deg))]
     q_fixed = None
     if args.q is not None:
         q_fixed = _joint_values(robot, args.q, bool(args.deg), "--q")

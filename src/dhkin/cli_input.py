@@ -1,8 +1,9 @@
 """What the `dhkin` command line accepts and how it reports faults of its input, in one line each:
 the exit statuses, the argument types every subcommand shares (each refuses what would fail or
 mislead deeper down, so that argparse reports it as a usage error naming the option), the
-parser class whose usage errors are one line, and the one-line text of any input error that
-reaches :func:`dhkin.cli.main`. The parsers themselves live in :mod:`dhkin.cli`.
+parser class whose usage errors are one line, the one-line text of any input error that reaches
+:func:`dhkin.cli.main`, and the readers of values the options carry (xacro arguments, angles,
+the pose of `dhkin ik`). The parsers themselves live in :mod:`dhkin.cli`.
 """
 
 from __future__ import annotations
@@ -12,7 +13,10 @@ import math
 from collections.abc import Callable, Sequence
 from typing import NoReturn
 
+import numpy as np
+
 from dhkin.errors import InputError, one_line
+from dhkin.transforms import xyz_rpy_to_matrix
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -92,3 +96,31 @@ def xacro_arguments(values: Sequence[str] | None) -> dict[str, str]:
                              value=value, expected="NAME:=VALUE")
         arguments[name] = text
     return arguments
+
+
+def angles(values: Sequence[float], degrees: bool) -> np.ndarray:
+    """Angles given on the command line -> radians (``degrees``: they are in degrees)."""
+    array = np.asarray(values, dtype=float)
+    return np.radians(array) if degrees else array
+
+
+def ik_target(args: argparse.Namespace) -> np.ndarray:
+    """The target of `dhkin ik`: --matrix FILE or --xyz [--rpy] (argparse allows one of them)."""
+    if args.matrix is not None:
+        if args.rpy is not None:
+            raise InputError("--rpy: applies to --xyz, not to --matrix (whose pose has its own "
+                             "rotation); expected --xyz X Y Z --rpy R P Y or --matrix FILE alone",
+                             field="rpy", value=args.rpy, expected="no --rpy with --matrix")
+        try:
+            T = np.loadtxt(args.matrix, dtype=float, ndmin=2)
+        except ValueError as exc:  # includes a file that is not UTF-8 text
+            raise InputError(f"--matrix {args.matrix}: expected a 4x4 matrix of numbers "
+                             f"({exc})", field="matrix", value=args.matrix,
+                             expected="a 4x4 matrix of numbers") from exc
+        if T.shape != (4, 4):
+            raise InputError(f"--matrix {args.matrix}: expected a 4x4 matrix, got shape "
+                             f"{T.shape}", field="matrix", value=args.matrix,
+                             expected="a 4x4 matrix")
+        return T
+    rpy = angles(args.rpy if args.rpy is not None else [0, 0, 0], args.deg)
+    return xyz_rpy_to_matrix(args.xyz, rpy)

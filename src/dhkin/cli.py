@@ -415,17 +415,18 @@ def build_parser() -> argparse.ArgumentParser:
                                         "description (rounded, exact or a vendor URDF)")
     _robot_arg(p)
     p.add_argument("--ik", help="module:function of an IK, ik(T) -> joint vectors (default: ours)")
-    p.add_argument("-n", type=int, default=10_000, help="uniform samples (default 10000), plus "
-                                                         "n/10 special and n/10 near-singular")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+    p.add_argument("-n", type=positive_int, default=10_000,
+                   help="uniform samples (default 10000), plus n/10 special and n/10 near-singular")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
+    p.add_argument("--tolerance", type=positive_float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
-    p.add_argument("--joint-tolerance", type=float, default=DEFAULT_JOINT_TOLERANCE,
+    p.add_argument("--joint-tolerance", type=positive_float, default=DEFAULT_JOINT_TOLERANCE,
                    help=f"rad / m: same joint vector (default {DEFAULT_JOINT_TOLERANCE:g})")
     p.add_argument("--deg", action="store_true", help="the --ik IK works in degrees")
     p.add_argument("--ik-frame", help="the --ik IK solves for this frame of our URDF, not tool0")
-    p.add_argument("--timeout", type=float, default=DEFAULT_CALL_TIMEOUT, help="seconds per IK "
-                   f"call, else a failure of its pose (default {DEFAULT_CALL_TIMEOUT:g})")
+    p.add_argument("--timeout", type=positive_float, default=DEFAULT_CALL_TIMEOUT,
+                   help=f"seconds per IK call, else a failure of its pose "
+                        f"(default {DEFAULT_CALL_TIMEOUT:g})")
     p.add_argument("--isolate", action="store_true", help="call the IK in a child process: a "
                    "crash or a hang it swallows fails its pose, not the run")
     p.add_argument("--json", help="write the report as JSON to this file")

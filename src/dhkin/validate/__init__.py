@@ -26,6 +26,7 @@ from dhkin.validate.report import (
     SAMPLE_SETS,
     SampleResult,
     ValidationReport,
+    failures_json,
     write_failures,
 )
 from dhkin.validate.run import (
@@ -69,6 +70,7 @@ __all__ = [
     "ValidationReport",
     "_resolvable",
     "adapt",
+    "failures_json",
     "load_ik",
     "own_ik",
     "perturbed_seeds",

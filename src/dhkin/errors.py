@@ -92,6 +92,10 @@ class FileWriteError(DhkinError, OSError):
     the plain writes it replaces raised. (A destination that is wrong as given, such as an
     existing file without force or a symbolic link, is an :class:`InputError`.)"""
 
+    def __str__(self) -> str:
+        # dhkin's one-line message, not OSError's "[Errno N] reason: 'file'" built from errno
+        return str(self.args[0]) if self.args else ""
+
 
 #: Earlier names of :class:`InputError` (see the module docstring).
 IKInputError = InputError

@@ -162,7 +162,12 @@ def choose(package: Path, environ: Mapping[str, str] | None = None,
     for root in user_roots(environ):
         if writable(root / key):
             return CacheChoice(root / key, "user", prebuilt)
-    private = _private_folder(Path(temporary_root or tempfile.gettempdir()))
+    if temporary_root is None:
+        try:
+            temporary_root = Path(tempfile.gettempdir())
+        except OSError:  # "No usable temporary directory found"
+            return CacheChoice(None, "none")
+    private = _private_folder(temporary_root)
     if private is not None and writable(private / "numba" / key):
         return CacheChoice(private / "numba" / key, "temporary", prebuilt)
     return CacheChoice(None, "none")

@@ -19,7 +19,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("foundation", ("dhkin.errors", "dhkin.transforms", "dhkin.dh", "dhkin.table_file",
                     "dhkin.reference", "dhkin.urdf", "dhkin.validators", "dhkin.vendors",
                     "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description",
-                    "dhkin.xml_text", "dhkin.axes_to_dh")),
+                    "dhkin.xml_text", "dhkin.axes_to_dh", "dhkin.files")),
     ("kinematics", ("dhkin.ik", "dhkin.ik.*", "dhkin.arm", "dhkin.opw",
                     "dhkin.opw_yaml")),
     ("analysis", ("dhkin.singularity", "dhkin.singularity.*", "dhkin.maps", "dhkin.maps.*",

@@ -20,10 +20,12 @@ from dhkin.cli_input import (
     Parser,
     angles,
     finite_float,
+    force_arg,
     ik_target,
     input_error_text,
     non_negative_float,
     non_negative_int,
+    output_name,
     positive_float,
     positive_int,
     xacro_arguments,
@@ -64,11 +66,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.format == "opw":
         from dhkin.opw_yaml import export_opw
 
-        print(export_opw(robot.table, args.output))
+        print(export_opw(robot.table, args.output, force=args.force))
         return EXIT_OK
     from dhkin.urdf import export
 
-    for path in export(robot.table, args.output):
+    for path in export(robot.table, args.output, force=args.force):
         print(path)
     return EXIT_OK
 
@@ -92,31 +94,19 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def cmd_import(args: argparse.Namespace) -> int:
+    from dhkin.files import check_output, write_file
     from dhkin.importer import import_description
 
     output = Path(args.output)
     if output.suffix not in (".yaml", ".yml"):
         raise InputError(f"-o {output}: expected a .yaml table file name", field="output",
                          value=str(output), expected="a path ending in .yaml")
-    if output.exists() and not args.force:
-        raise InputError(f"-o {output}: the file exists; expected a new file name, or --force "
-                         "to replace it", field="output", value=str(output),
-                         expected="a file that does not exist (or --force)")
-    if not output.parent.is_dir():
-        raise InputError(f"-o {output}: no folder {output.parent}; expected an existing folder",
-                         field="output", value=str(output), expected="an existing folder")
+    check_output(output, "-o", force=True)  # folder, link, writable; the content is compared last
     result = import_description(args.description, base=args.base, tip=args.tip,
                                 convention=args.convention,
                                 units={"length": args.length, "angle": args.angle},
                                 xacro_args=xacro_arguments(args.xacro_arg), name=args.name)
-    partial = output.with_name(f".{output.name}.partial")
-    try:
-        partial.write_text(result.yaml(), encoding="utf-8")
-        partial.replace(output)
-    except OSError as exc:
-        partial.unlink(missing_ok=True)
-        raise InputError(f"-o {output}: cannot write the table ({exc.strerror})",
-                         field="output", value=str(output), expected="a writable file") from exc
+    write_file(output, result.yaml(), "-o", force=args.force)
     print(result.summary())
     print(f"wrote {output}")
     return EXIT_OK
@@ -185,18 +175,23 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    from dhkin.files import check_output, unused_name, write_file
     from dhkin.validation import (
         adapt,
+        failures_json,
         load_ik,
         own_ik,
         replay,
         tool_frame_from_robot,
         validate,
-        write_failures,
     )
     from dhkin.validation.arguments import check_command_line
 
     check_command_line(args)
+    for option, output in (("--json", args.json), ("--report", args.report),
+                           ("--failures", args.failures)):
+        if output is not None:  # checked before the run, so that no result is lost after it
+            check_output(output, option, force=args.force)
     robot = load(args.robot)
     ik, name = None, args.ik  # None: the robot's own IK, closed form or numerical, as the API
     if args.ik is None:
@@ -219,11 +214,15 @@ def cmd_validate(args: argparse.Namespace) -> int:
                           tip=args.tip, timeout=args.timeout, isolate=args.isolate)
     print(report.summary())
     if args.json:
-        Path(args.json).write_text(json.dumps(report.to_json(), indent=1), encoding="utf-8")
+        write_file(args.json, json.dumps(report.to_json(), indent=1), "--json", args.force)
     if args.report:
-        Path(args.report).write_text(report.markdown(), encoding="utf-8")
+        write_file(args.report, report.markdown(), "--report", args.force)
     if report.failures:
-        path = write_failures(report, args.failures or f"{robot.name}_ik_failures.json")
+        text = failures_json(report)
+        path = args.failures or f"{robot.name}_ik_failures.json"
+        if args.failures is None and not args.force:  # a default name replaces nothing
+            path = unused_name(path, text)
+        path = write_file(path, text, "--failures", args.force)
         print(f"failures written to {path} (rerun on the same reference: dhkin validate "
               f"{args.robot} --replay {path}{' --ik ' + args.ik if args.ik else ''})")
     return EXIT_OK if report.ok else EXIT_FAILED
@@ -293,7 +292,9 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
     from dhkin.maps import DEFAULT_JOINT_RESOLUTION, DEFAULT_RESOLUTION, PLANES
 
     _robot_arg(parser)
-    parser.add_argument("-o", "--output", required=True, help="PNG file to write")
+    parser.add_argument("-o", "--output", required=True, type=output_name,
+                        help="PNG file to write (its folder must exist)")
+    force_arg(parser)
     parser.add_argument("--plane", choices=sorted(PLANES), default="xz",
                         help="workspace slice plane of base_link (default xz)")
     parser.add_argument("--offset", type=finite_float, default=0.0,
@@ -326,7 +327,8 @@ def cmd_map(args: argparse.Namespace) -> int:
         q_fixed = _joint_values(robot, args.q, bool(args.deg), "--q")
     maps = draw_maps(robot, args.output, plane=args.plane, offset=args.offset, rpy=rpy,
                      resolution=args.resolution, joint_resolution=args.joint_resolution,
-                     q_fixed=q_fixed, progress=not args.no_progress and sys.stderr.isatty())
+                     q_fixed=q_fixed, progress=not args.no_progress and sys.stderr.isatty(),
+                     force=args.force)
     print(describe(maps))
     return EXIT_OK
 
@@ -343,7 +345,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("export", help="write <name>_macro.xacro, <name>.urdf.xacro, <name>.urdf "
                                       "(or, --format opw, <name>_opw.yaml)")
     _robot_arg(p)
-    p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
+    p.add_argument("-o", "--output", required=True, type=output_name,
+                   help="output folder (created if needed)")
+    force_arg(p)
     p.add_argument("--format", choices=("urdf", "opw"), default="urdf",
                    help="urdf: the xacro macro, its top-level xacro and the URDF (default); "
                         "opw: MoveIt opw_kinematics parameters (spherical-wrist arms with an "
@@ -369,7 +373,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("import", help="import a URDF or xacro description as a DH table")
     p.add_argument("description", help="the URDF or xacro file")
-    p.add_argument("-o", "--output", required=True, help="the table file to write (.yaml)")
+    p.add_argument("-o", "--output", required=True, type=output_name,
+                   help="the table file to write (.yaml)")
     p.add_argument("--base", help="base link of the chain (default: the root link)")
     p.add_argument("--tip", help="tip link of the chain (default: the single leaf link)")
     p.add_argument("--convention", choices=("standard", "modified"), default="standard",
@@ -429,9 +434,13 @@ def build_parser() -> argparse.ArgumentParser:
                         f"(default {DEFAULT_CALL_TIMEOUT:g})")
     p.add_argument("--isolate", action="store_true", help="call the IK in a child process: a "
                    "crash or a hang it swallows fails its pose, not the run")
-    p.add_argument("--json", help="write the report as JSON to this file")
-    p.add_argument("--report", help="write the report as Markdown to this file")
-    p.add_argument("--failures", help="failure file (default <robot>_ik_failures.json)")
+    p.add_argument("--json", type=output_name, help="write the report as JSON to this file")
+    p.add_argument("--report", type=output_name,
+                   help="write the report as Markdown to this file")
+    p.add_argument("--failures", type=output_name,
+                   help="failure file (default <robot>_ik_failures.json, or -2, -3, ... "
+                        "rather than replace an earlier one)")
+    force_arg(p)
     p.add_argument("--replay", help="rerun the samples of a failure file (on the reference it "
                                     "records)")
     p.add_argument("--reference", help="description that makes the targets and checks the "

@@ -61,6 +61,20 @@ def non_negative_float(text: str) -> float:
     return _number(text, float, "a finite number >= 0", lambda v: math.isfinite(v) and v >= 0)
 
 
+def output_name(text: str) -> str:
+    """A file or folder to write: not empty (``Path("")`` is the current folder, so ``-o ""``
+    would write there unasked)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file or folder name, got an empty string")
+    return text
+
+
+def force_arg(parser: argparse.ArgumentParser) -> None:
+    """The --force option of every subcommand that writes files."""
+    parser.add_argument("--force", action="store_true",
+                        help="replace existing output files whose content differs")
+
+
 class Parser(argparse.ArgumentParser):
     """An ArgumentParser whose usage errors are one line (then exit 2), like dhkin's own."""
 

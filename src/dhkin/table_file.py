@@ -28,6 +28,7 @@ from dhkin.dh import (
     fixed_joint_names,
 )
 from dhkin.errors import DHError
+from dhkin.files import write_file
 from dhkin.transforms import rot_y, rot_z, xyz_rpy_to_matrix
 from dhkin.xml_text import NAME_RULE, name_problem, text_problem
 
@@ -396,11 +397,11 @@ def table_to_yaml(table: DHTable, units: Mapping[str, str] | None = None,
 
 
 def write_table(table: DHTable, path: str | Path, units: Mapping[str, str] | None = None,
-                header: str | None = None) -> Path:
-    """Write :func:`table_to_yaml` of ``table`` to ``path``; return the path."""
-    file = Path(path)
-    file.write_text(table_to_yaml(table, units, header), encoding="utf-8")
-    return file
+                header: str | None = None, force: bool = False) -> Path:
+    """Write :func:`table_to_yaml` of ``table`` to ``path``; return the path. Written as
+    :mod:`dhkin.files` says: atomically, an existing file with other content only with
+    ``force``, never through a symbolic link."""
+    return write_file(path, table_to_yaml(table, units, header), field="table", force=force)
 
 
 def _yaml_number(value: float) -> str:

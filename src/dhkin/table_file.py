@@ -184,8 +184,8 @@ def _length(value: Any, where: _Where, field_name: str, units: _Units) -> float:
     number = _number(value, where, field_name)
     if not abs(number * units.length_scale) <= MAX_LENGTH + _SLACK:
         limit = MAX_LENGTH / units.length_scale
-        raise where.error(field_name, value, f"a length within +-{limit:g} {units.length}",
-                          f"expected a length within +-{limit:g} {units.length} "
+        raise where.error(field_name, value, f"a length within +-{limit:.15g} {units.length}",
+                          f"expected a length within +-{limit:.15g} {units.length} "
                           f"(dhkin.dh.MAX_LENGTH), got {shown(value)} {units.length}; are "
                           f"units.length right?")
     return number * units.length_scale
@@ -274,8 +274,8 @@ def _joint(entry: Any, index: int, where: _Where, units: _Units) -> Joint:
     label = f"joints[{index}]"
     if not isinstance(entry, Mapping):
         raise where.error(label, entry, "a mapping of DH values")
-    entry = _given(entry, (*_JOINT_KEYS_COMMON, "d", "theta"))
-    joint_type = entry.get("type", "revolute")
+    joint_type = entry.get("type")
+    joint_type = "revolute" if joint_type is None else joint_type
     if not isinstance(joint_type, str) or joint_type not in JOINT_TYPES:
         raise where.error(f"{label}.type", joint_type, f"one of {list(JOINT_TYPES)}")
     revolute = joint_type == "revolute"
@@ -284,6 +284,7 @@ def _joint(entry: Any, index: int, where: _Where, units: _Units) -> Joint:
     required = ("a", "alpha", "lower", "upper") + (("d",) if revolute else ())
     optional = tuple(k for k in _JOINT_KEYS_COMMON if k not in required)
     optional += () if revolute else ("theta",)
+    entry = _given(entry, optional)
     for wrong in (("theta",) if revolute else ("d",)):
         if wrong in entry:
             variable = "theta" if revolute else "d"

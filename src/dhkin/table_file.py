@@ -11,10 +11,9 @@ lengths) are those of :mod:`dhkin.dh`, reported here in the file's units.
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, NamedTuple, cast
+from typing import Any, cast
 
 import numpy as np
 import yaml
@@ -27,7 +26,6 @@ from dhkin.dh import (
     LENGTH_UNITS,
     MAX_JOINT_TURNS,
     MAX_JOINTS,
-    MAX_LENGTH,
     NO_CORRECTION,
     RESERVED_LINK_NAMES,
     Convention,
@@ -38,9 +36,22 @@ from dhkin.dh import (
     fixed_joint_names,
 )
 from dhkin.errors import DHError
-from dhkin.table_yaml import field_key, load_yaml, read_table_text, shown
+from dhkin.table_values import (
+    Units,
+    Where,
+    angle_value,
+    check_keys,
+    check_unique,
+    given,
+    length_value,
+    name_value,
+    number_value,
+    text_value,
+    units_value,
+    vector3,
+)
+from dhkin.table_yaml import load_yaml, read_table_text, shown
 from dhkin.transforms import rot_y, rot_z, xyz_rpy_to_matrix
-from dhkin.xml_text import NAME_RULE, name_problem, text_problem
 
 _TOP_KEYS_REQUIRED = ("name", "convention", "units", "joints")
 
@@ -53,10 +64,6 @@ _JOINT_KEYS_COMMON = ("name", "link", "type", "a", "alpha", "offset", "direction
 
 
 _FRAME_KEYS = ("xyz", "rpy")
-
-
-#: Slack of the range checks against the rounding of unit conversion (720 deg -> 4 pi rad).
-_SLACK = 1e-9
 
 
 def load_table(path: str | Path) -> DHTable:
@@ -74,19 +81,19 @@ def read_back(text: str, source: str = "<table>") -> DHTable:
 
 def parse_table(data: Any, source: str = "<table>", path: Path | None = None) -> DHTable:
     """Validate a table given as a mapping (the parsed YAML) and convert it to SI units."""
-    where = _Where(source)
+    where = Where(source)
     if not isinstance(data, Mapping):
         got = "an empty file" if data is None else type(data).__name__
         raise DHError(f"{source}: expected a mapping with keys {_TOP_KEYS_REQUIRED}, got {got}",
                       field="file", value=got, expected=f"a mapping with keys {_TOP_KEYS_REQUIRED}")
-    data = _given(data, _TOP_KEYS_OPTIONAL)
-    _check_keys(data, _TOP_KEYS_REQUIRED, _TOP_KEYS_OPTIONAL, where, "")
+    data = given(data, _TOP_KEYS_OPTIONAL)
+    check_keys(data, _TOP_KEYS_REQUIRED, _TOP_KEYS_OPTIONAL, where, "")
 
-    name = _name(data["name"], where, "name", macro=True)
+    name = name_value(data["name"], where, "name", macro=True)
     convention = data["convention"]
     if not isinstance(convention, str) or convention not in CONVENTIONS:
         raise where.error("convention", convention, f"one of {list(CONVENTIONS)}")
-    units = _units(data["units"], where)
+    units = units_value(data["units"], where)
 
     joints_data = data["joints"]
     if not isinstance(joints_data, Sequence) or isinstance(joints_data, str):
@@ -100,8 +107,8 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
                           f"expected at most {MAX_JOINTS} joints (dhkin.dh.MAX_JOINTS: an arm), "
                           f"got {len(joints_data)}")
     joints = tuple(_joint(entry, i, where, units) for i, entry in enumerate(joints_data))
-    _check_unique([j.name for j in joints], where, "name")
-    _check_unique([j.link for j in joints], where, "link")
+    check_unique([j.name for j in joints], where, "name")
+    check_unique([j.link for j in joints], where, "link")
     fixed = fixed_joint_names(joints[-1].link)
     for i, joint in enumerate(joints):
         if joint.name in fixed:
@@ -113,8 +120,8 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
     tool = _frame(data.get("tool"), where, "tool", units)
     flange = (_frame(data["flange"], where, "flange", units)
               if "flange" in data else _default_flange())
-    description = _text(data.get("description", ""), where, "description")
-    source_text = _text(data.get("source", ""), where, "source")
+    description = text_value(data.get("description", ""), where, "description")
+    source_text = text_value(data.get("source", ""), where, "source")
     try:
         return DHTable(name=name, convention=cast(Convention, convention), joints=joints,
                        base=base, tool=tool, flange=flange, description=description,
@@ -124,153 +131,31 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
                       expected=exc.expected) from exc
 
 
-class _Units(NamedTuple):
-    """A table's units: SI per unit, and the unit names for messages."""
-
-    length_scale: float
-    angle_scale: float
-    length: str
-    angle: str
-
-
-class _Where:
-    """Formats error messages as '<file>: <field>: <what was expected>'."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def error(self, field_name: str, value: Any, expected: str,
-              problem: str | None = None) -> DHError:
-        """DHError '<file>: <field>: <problem>' (default 'expected <expected>, got <value>')
-        carrying field, value and expected."""
-        text = problem if problem is not None else f"expected {expected}, got {shown(value)}"
-        return DHError(f"{self.source}: {field_name}: {text}", field=field_name, value=value,
-                       expected=expected)
-
-
-def _given(data: Mapping[Any, Any], optional: Sequence[str]) -> dict[Any, Any]:
-    """``data`` without the optional keys given no value (YAML null): those take their default."""
-    return {key: value for key, value in data.items()
-            if not (value is None and key in optional)}
-
-
-def _check_keys(data: Mapping[Any, Any], required: Sequence[str], optional: Sequence[str],
-                where: _Where, prefix: str) -> None:
-    allowed = list(required) + list(optional)
-    for key in data:
-        if key not in allowed:
-            raise where.error(f"{prefix}{field_key(key)}", key, f"one of {allowed}",
-                              f"unknown key; expected one of {allowed}")
-    for key in required:
-        if key not in data:
-            raise where.error(f"{prefix}{key}", None, "the key", "missing required key")
-
-
-def _number(value: Any, where: _Where, field_name: str) -> float:
-    """A finite number (an int or float of YAML; not a boolean) as a float."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise where.error(field_name, value, "a finite number")
-    try:
-        number = float(value)
-    except OverflowError:  # an integer beyond float's range
-        number = math.inf
-    if not math.isfinite(number):
-        raise where.error(field_name, value, "a finite number")
-    return number
-
-
-def _length(value: Any, where: _Where, field_name: str, units: _Units) -> float:
-    """A length in the table's unit, within +-MAX_LENGTH, in metres."""
-    number = _number(value, where, field_name)
-    if not abs(number * units.length_scale) <= MAX_LENGTH + _SLACK:
-        limit = MAX_LENGTH / units.length_scale
-        raise where.error(field_name, value, f"a length within +-{limit:.15g} {units.length}",
-                          f"expected a length within +-{limit:.15g} {units.length} "
-                          f"(dhkin.dh.MAX_LENGTH), got {shown(value)} {units.length}; are "
-                          f"units.length right?")
-    return number * units.length_scale
-
-
-def _angle(value: Any, where: _Where, field_name: str, units: _Units, turns: float = 1.0,
-           what: str = "an angle") -> float:
-    """An angle in the table's unit, within +-``turns`` turns, in radians."""
-    number = _number(value, where, field_name)
-    if not abs(number * units.angle_scale) <= turns * 2 * math.pi + _SLACK:
-        limit = f"+-{turns * 360:g} deg (+-{turns * 2:g}pi rad"
-        limit += f", dhkin.dh.MAX_JOINT_TURNS = {MAX_JOINT_TURNS} turns)" if turns != 1 else ")"
-        raise where.error(field_name, value, f"{what} within {limit}",
-                          f"expected {what} within {limit}, got {shown(value)} {units.angle}; "
-                          f"are units.angle right?")
-    return number * units.angle_scale
-
-
-def _text(value: Any, where: _Where, field_name: str) -> str:
-    """Free text (description, source): any string XML can hold exactly (dhkin.xml_text)."""
-    problem = text_problem(value)
-    if problem is not None:
-        raise where.error(field_name, value, "text without control characters other than tab "
-                                             "and line feed", _bounded(problem, value))
-    return str(value)
-
-
-def _name(value: Any, where: _Where, field_name: str, macro: bool = False) -> str:
-    """A robot, joint or link name (dhkin.xml_text.NAME_RULE); ``macro``: the robot's name, which
-    also names the xacro macro and so may not be one of xacro's directives."""
-    problem = name_problem(value, macro=macro)
-    if problem is not None:
-        raise where.error(field_name, value, NAME_RULE, _bounded(problem, value))
-    return str(value)
-
-
-def _bounded(problem: str, value: Any) -> str:
-    """``problem`` with the full repr of ``value`` in it cut to :func:`shown`'s length."""
-    full = repr(value)
-    return problem.replace(full, shown(value)) if len(full) > len(shown(value)) else problem
-
-
-def _units(value: Any, where: _Where) -> _Units:
-    if not isinstance(value, Mapping):
-        raise where.error("units", value, "a mapping {length: m|mm, angle: deg|rad}")
-    _check_keys(value, ("length", "angle"), (), where, "units.")
-    length, angle = value["length"], value["angle"]
-    if not isinstance(length, str) or length not in LENGTH_UNITS:
-        raise where.error("units.length", length, f"one of {list(LENGTH_UNITS)}")
-    if not isinstance(angle, str) or angle not in ANGLE_UNITS:
-        raise where.error("units.angle", angle, f"one of {list(ANGLE_UNITS)}")
-    return _Units(LENGTH_UNITS[length], ANGLE_UNITS[angle], length, angle)
-
-
-def _vector3(value: Any, where: _Where, field_name: str) -> list[Any]:
-    if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 3:
-        raise where.error(field_name, value, "a list of 3 numbers")
-    return list(value)
-
-
-def _xyz_rpy(value: Any, where: _Where, field_name: str,
-             units: _Units) -> tuple[list[float], list[float]]:
+def _xyz_rpy(value: Any, where: Where, field_name: str,
+             units: Units) -> tuple[list[float], list[float]]:
     """``{xyz: [x, y, z], rpy: [r, p, y]}`` (each optional, default zero; rpy within +-1 turn)
     -> xyz in m, rpy in rad."""
     if not isinstance(value, Mapping):
         raise where.error(field_name, value, "a mapping {xyz: [x, y, z], rpy: [r, p, y]}")
-    value = _given(value, _FRAME_KEYS)
-    _check_keys(value, (), _FRAME_KEYS, where, f"{field_name}.")
-    xyz = [_length(v, where, f"{field_name}.xyz[{k}]", units)
-           for k, v in enumerate(_vector3(value.get("xyz", [0, 0, 0]), where,
+    value = given(value, _FRAME_KEYS)
+    check_keys(value, (), _FRAME_KEYS, where, f"{field_name}.")
+    xyz = [length_value(v, where, f"{field_name}.xyz[{k}]", units)
+           for k, v in enumerate(vector3(value.get("xyz", [0, 0, 0]), where,
                                           f"{field_name}.xyz"))]
-    rpy = [_angle(v, where, f"{field_name}.rpy[{k}]", units)
-           for k, v in enumerate(_vector3(value.get("rpy", [0, 0, 0]), where,
+    rpy = [angle_value(v, where, f"{field_name}.rpy[{k}]", units)
+           for k, v in enumerate(vector3(value.get("rpy", [0, 0, 0]), where,
                                           f"{field_name}.rpy"))]
     return xyz, rpy
 
 
-def _frame(value: Any, where: _Where, field_name: str, units: _Units) -> NDArray[np.float64]:
+def _frame(value: Any, where: Where, field_name: str, units: Units) -> NDArray[np.float64]:
     if value is None:
         return np.eye(4)
     xyz, rpy = _xyz_rpy(value, where, field_name, units)
     return xyz_rpy_to_matrix(np.array(xyz), np.array(rpy))
 
 
-def _joint(entry: Any, index: int, where: _Where, units: _Units) -> Joint:
+def _joint(entry: Any, index: int, where: Where, units: Units) -> Joint:
     label = f"joints[{index}]"
     if not isinstance(entry, Mapping):
         raise where.error(label, entry, "a mapping of DH values")
@@ -284,7 +169,7 @@ def _joint(entry: Any, index: int, where: _Where, units: _Units) -> Joint:
     required = ("a", "alpha", "lower", "upper") + (("d",) if revolute else ())
     optional = tuple(k for k in _JOINT_KEYS_COMMON if k not in required)
     optional += () if revolute else ("theta",)
-    entry = _given(entry, optional)
+    entry = given(entry, optional)
     for wrong in (("theta",) if revolute else ("d",)):
         if wrong in entry:
             variable = "theta" if revolute else "d"
@@ -292,22 +177,22 @@ def _joint(entry: Any, index: int, where: _Where, units: _Units) -> Joint:
                               f"a {joint_type} joint's {variable} is its joint variable; "
                               f"give its constant part as 'offset' and the fixed "
                               f"{fixed_key} as '{fixed_key}'")
-    _check_keys(entry, required, optional, where, f"{label}.")
+    check_keys(entry, required, optional, where, f"{label}.")
 
     def length(key: str) -> float:
-        return _length(entry.get(key, 0.0), where, f"{label}.{key}", units)
+        return length_value(entry.get(key, 0.0), where, f"{label}.{key}", units)
 
     def angle(key: str) -> float:
-        return _angle(entry.get(key, 0.0), where, f"{label}.{key}", units)
+        return angle_value(entry.get(key, 0.0), where, f"{label}.{key}", units)
 
     def limit(key: str) -> float:
         if revolute:
-            return _angle(entry[key], where, f"{label}.{key}", units, turns=MAX_JOINT_TURNS,
+            return angle_value(entry[key], where, f"{label}.{key}", units, turns=MAX_JOINT_TURNS,
                           what="a joint limit")
         return length(key)
 
-    name = _name(entry.get("name", f"joint_{index + 1}"), where, f"{label}.name")
-    link = _name(entry.get("link", f"link_{index + 1}"), where, f"{label}.link")
+    name = name_value(entry.get("name", f"joint_{index + 1}"), where, f"{label}.name")
+    link = name_value(entry.get("link", f"link_{index + 1}"), where, f"{label}.link")
     if link in RESERVED_LINK_NAMES:
         raise where.error(f"{label}.link", link, f"a name other than {list(RESERVED_LINK_NAMES)}",
                           f"{link!r} is reserved for a fixed frame; expected a name other than "
@@ -322,8 +207,8 @@ def _joint(entry: Any, index: int, where: _Where, units: _Units) -> Joint:
                           f"expected lower < upper, got lower = {shown(entry['lower'])}, "
                           f"upper = {shown(entry['upper'])}")
     variable_scale = units.angle_scale if revolute else units.length_scale
-    velocity = _number(entry.get("velocity", 0.0), where, f"{label}.velocity") * variable_scale
-    effort = _number(entry.get("effort", 0.0), where, f"{label}.effort")
+    velocity = number_value(entry.get("velocity", 0.0), where, f"{label}.velocity") * variable_scale
+    effort = number_value(entry.get("effort", 0.0), where, f"{label}.effort")
     for key, value in (("velocity", velocity), ("effort", effort)):
         if value < 0:
             raise where.error(f"{label}.{key}", entry[key], "a value >= 0")
@@ -339,21 +224,12 @@ def _joint(entry: Any, index: int, where: _Where, units: _Units) -> Joint:
     )
 
 
-def _correction(value: Any, where: _Where, field_name: str,
-                units: _Units) -> tuple[float, float, float, float, float, float]:
+def _correction(value: Any, where: Where, field_name: str,
+                units: Units) -> tuple[float, float, float, float, float, float]:
     """A joint's ``correction: {xyz: [x, y, z], rpy: [r, p, y]}`` (table units) -> SI 6-tuple."""
     (x, y, z), (roll, pitch, yaw) = _xyz_rpy(value, where, field_name, units)
     return (x, y, z, roll, pitch, yaw)
 
-
-def _check_unique(names: list[str], where: _Where, key: str) -> None:
-    seen: dict[str, int] = {}
-    for i, n in enumerate(names):
-        if n in seen:
-            raise where.error(f"joints[{i}].{key}", n, f"unique {key}s",
-                              f"duplicate {key} {n!r} (also joints[{seen[n]}]); expected "
-                              f"unique {key}s")
-        seen[n] = i
 
 #: Units :func:`table_to_yaml` writes by default: metres and radians, so that every number
 #: round-trips exactly (``repr`` of the float, read back with a scale of 1).

@@ -43,22 +43,22 @@ from ruamel.yaml.reader import ReaderError
 from dhkin.errors import DHError
 
 #: Largest table file read, in bytes (1 MiB). A table is a few KB (a 32-joint table with every
-#: optional key and a correction per joint is about 15 KB); 1 MiB leaves room for long
-#: descriptions and comments while bounding the time and memory reading costs (the pure-Python
-#: YAML reader takes about a second per MiB).
+#: key and a correction per joint, as table_to_yaml writes it, is 12 KB); 1 MiB leaves room for
+#: long descriptions and comments while bounding what reading costs (the pure-Python YAML reader
+#: takes about a second per MiB).
 MAX_TABLE_BYTES = 1 << 20
 
 
 #: Most YAML nodes (mappings, lists and values) a table file may hold, counted with every alias
-#: expanded. A table with the most joints (dhkin.dh.MAX_JOINTS) and every optional key and
-#: correction has about 32 * 45 + 30 = 1,470 nodes; 20,000 leaves a wide margin, and stops an alias
-#: bomb (376 bytes that expand to 10^9 nodes) after 20,000 cheap steps.
+#: expanded. A table with the most joints (dhkin.dh.MAX_JOINTS) and every key and a correction per
+#: joint has 1,173 nodes; 20,000 leaves a wide margin, and stops an alias bomb (376 bytes that
+#: expand to 10^9 nodes) after 20,000 cheap steps.
 MAX_YAML_NODES = 20_000
 
 
-#: Deepest nesting of lists and mappings in a table file. A table nests 4 deep (the file, joints,
-#: a joint, its correction; then xyz); 16 leaves room for sloppy input to be reported by the
-#: field checks, and keeps the (recursive) composition of nodes far from Python's recursion limit.
+#: Deepest nesting of lists and mappings in a table file. A table nests 5 deep (the file, joints,
+#: a joint, its correction, its xyz); 16 leaves room for sloppy input to reach the field checks,
+#: and keeps the (recursive) composition of nodes far from Python's recursion limit.
 MAX_YAML_DEPTH = 16
 
 

@@ -17,6 +17,7 @@ from .conftest import REPO
 SOURCE = REPO / "src"
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("foundation", ("dhkin.errors", "dhkin.transforms", "dhkin.dh", "dhkin.table_file",
+                    "dhkin.table_yaml", "dhkin.table_values",
                     "dhkin.reference", "dhkin.urdf", "dhkin.validators", "dhkin.vendors",
                     "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description",
                     "dhkin.xml_text", "dhkin.axes_to_dh", "dhkin.files")),

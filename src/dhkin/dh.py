@@ -66,6 +66,34 @@ def fixed_joint_names(last_link: str) -> tuple[str, str, str]:
 DEFAULT_FLANGE_RPY_DEG = (0.0, -90.0, 0.0)
 
 
+#: Most joints a table may have. dhkin is for serial arms: industrial arms have 6 joints, redundant
+#: arms 7, an arm on a linear track or a positioner a few more; 32 covers every real arm with room,
+#: and keeps every per-joint cost bounded (FK frames, the URDF, Pinocchio's model, the IK's 2pi
+#: copies): 500 joints made ``reference()`` peak at 8 GB and 10^4 crashed ``dhkin fk``.
+MAX_JOINTS = 32
+
+
+#: Largest magnitude of a revolute joint's limits, in turns (2 turns: +-720 deg, +-4pi rad). The
+#: widest real joint in robots/ and in the vendor URDFs of ../shared/reference turns +-360.6 deg
+#: (Motoman GP7 joint 6), datasheets go to +-400 deg (ABB wrists) and continuous joints are imported
+#: as +-360 deg. The IK lists every in-limit 2pi copy of a solution: within +-2 turns a joint has at
+#: most 6 copies (a 6-joint branch at most 6^6), where +-36000 deg asked for 229 TiB.
+MAX_JOINT_TURNS = 2
+
+
+#: Largest magnitude of any length in a table, in metres (a, d, a prismatic joint's offset and
+#: limits, the xyz of base, tool, flange and corrections). The largest arms reach about 4 m and
+#: linear tracks tens of metres; 1 km covers any real machine, and keeps lengths where double
+#: precision still resolves the IK's 1e-9 m verification tolerance with a margin of 1000
+#: (1e3 m * 2.2e-16 = 2e-13 m) and where no FK or IK product of lengths can overflow.
+MAX_LENGTH = 1000.0
+
+
+#: Slack of the limit checks against rounding when a table's degrees or millimetres are
+#: converted (720 deg * pi / 180 may differ from 4 pi by an ulp).
+_LIMIT_SLACK = 1e-9
+
+
 #: A joint without a correction: (x, y, z) m, (roll, pitch, yaw) rad, all zero.
 NO_CORRECTION: tuple[float, float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
@@ -124,6 +152,9 @@ class DHTable:
     description: str = ""
     source: str = ""
     path: Path | None = None
+
+    def __post_init__(self) -> None:
+        check_table_limits(self)
 
     @property
     def dof(self) -> int:
@@ -207,6 +238,49 @@ class DHTable:
     def random_q(self, n: int, rng: np.random.Generator) -> NDArray[np.float64]:
         """n joint vectors drawn uniformly within the limits, shape (n, dof)."""
         return rng.uniform(self.lower, self.upper, size=(n, self.dof))
+
+
+def check_table_limits(table: DHTable) -> None:
+    """Raise a :class:`DHError` naming the field when ``table`` exceeds a limit of this module:
+    more than :data:`MAX_JOINTS` joints (checked first, before anything per joint), a revolute
+    limit beyond :data:`MAX_JOINT_TURNS` turns, a length beyond :data:`MAX_LENGTH` metres, or a
+    value that is not finite. Every :class:`DHTable` is checked when it is made."""
+    count = len(table.joints)
+    if count > MAX_JOINTS:
+        raise DHError(field="joints", value=count,
+                      expected=f"at most {MAX_JOINTS} joints (dhkin.dh.MAX_JOINTS)")
+    for label, T in (("base", table.base), ("tool", table.tool), ("flange", table.flange)):
+        matrix = np.asarray(T, dtype=float)
+        if matrix.shape != (4, 4) or not np.all(np.isfinite(matrix)):
+            raise DHError(field=label, value=f"shape {matrix.shape}",
+                          expected="a finite (4, 4) transform")
+        for k in range(3):
+            _check_length(float(matrix[k, 3]), f"{label}.xyz[{k}]")
+    for i, joint in enumerate(table.joints):
+        label = f"joints[{i}]"
+        for key in ("a", "alpha", "d", "theta", "offset", "velocity", "effort"):
+            if not math.isfinite(getattr(joint, key)):
+                raise DHError(field=f"{label}.{key}", value=getattr(joint, key),
+                              expected="a finite number")
+        for key in ("a", "d") + (() if joint.is_revolute else ("offset", "lower", "upper")):
+            _check_length(getattr(joint, key), f"{label}.{key}")
+        for k in range(3):
+            _check_length(joint.correction[k], f"{label}.correction.xyz[{k}]")
+        if joint.is_revolute:
+            for key in ("lower", "upper"):
+                value = getattr(joint, key)
+                if not abs(value) <= MAX_JOINT_TURNS * 2 * math.pi + _LIMIT_SLACK:
+                    raise DHError(field=f"{label}.{key}", value=value,
+                                  expected=f"a revolute joint limit within "
+                                           f"+-{MAX_JOINT_TURNS * 2 * math.pi:.6g} rad "
+                                           f"(+-{MAX_JOINT_TURNS} turns, dhkin.dh.MAX_JOINT_TURNS)")
+
+
+def _check_length(value: float, field_name: str) -> None:
+    """Raise a DHError unless ``value`` (metres) lies within +-:data:`MAX_LENGTH`."""
+    if not abs(value) <= MAX_LENGTH + _LIMIT_SLACK:
+        raise DHError(field=field_name, value=value,
+                      expected=f"a length within +-{MAX_LENGTH:g} m (dhkin.dh.MAX_LENGTH)")
 
 
 def dh_matrices(

@@ -92,7 +92,9 @@ class ClosedFormSolver:
         spans = table.upper - table.lower
         revolute = np.array([j.is_revolute for j in table.joints])
         copies = np.where(revolute, np.floor(spans / TWO_PI) + 2, 1).astype(np.int64)
-        #: Most solutions one pose can have with every copy.
+        #: Most solutions one pose can have with every copy: a revolute joint has at most
+        #: 2 * MAX_JOINT_TURNS + 2 = 6 copies, since every DHTable keeps its limits within
+        #: +-dhkin.dh.MAX_JOINT_TURNS turns (what bounds the buffers sized by this number).
         self.max_solutions = int(self.n_branches * np.prod(copies))
 
     def __repr__(self) -> str:

@@ -225,7 +225,23 @@ def test_text_rejection_names_the_table_file(tmp_path: Path) -> None:
 
 def _bad_name_cases() -> list[tuple[str, Any]]:
     fields = ["name", "joints[0].name", "joints[2].name", "joints[5].link"]
-    return [(field, bad) for field in fields for bad in BAD_NAMES]
+    # A joint's name and link are optional: left empty (None) they take their documented
+    # defaults (test_empty_optional_names_take_their_defaults); the table's name is required.
+    return [(field, bad) for field in fields for bad in BAD_NAMES
+            if not (bad is None and field.startswith("joints"))]
+
+
+def test_empty_optional_names_take_their_defaults(tmp_path: Path) -> None:
+    """`name:` or `link:` of a joint left empty is the default a missing key gives, not None."""
+    data = table_data()
+    del data["joints"][2]["name"], data["joints"][5]["link"]
+    expected = dhkin.load(write_table(tmp_path, data)).table
+    data = table_data()
+    data["joints"][2]["name"], data["joints"][5]["link"] = None, None
+    (tmp_path / "empty").mkdir()
+    got = dhkin.load(write_table(tmp_path / "empty", data)).table
+    assert got.joints[2].name == expected.joints[2].name
+    assert got.joints[5].link == expected.joints[5].link
 
 
 @pytest.mark.parametrize(("field", "bad"), _bad_name_cases())

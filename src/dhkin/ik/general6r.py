@@ -1,0 +1,362 @@
+"""Closed-form IK of any six-revolute chain: every solution, by algebraic elimination.
+
+:class:`General6RSolver` solves a table of six revolute joints (either DH convention, offsets,
+directions, base, tool, corrections) whatever its geometry. Poses are base_link -> tool0 (or a
+TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
+
+1. The exact chain (:func:`dhkin.ik.plan.chain_array`) is written as a standard-DH model
+   (:mod:`dhkin.ik.general6r_model`), forwards or tip to base (the reversed chain solves
+   T^-1), lengths scaled to order one.
+2. Raghavan and Roth's elimination (:mod:`dhkin.ik.general6r_elimination`) in one of three
+   arrangements gives a 12 x 12 matrix polynomial of degree two in the half-angle tangent of
+   the eliminated joint; its 24 eigenvalues (QZ on the companion pencil) hold every solution.
+   The arrangement and direction are chosen per table (:func:`choose_arrangement`): the one
+   whose matrix polynomial is regular (Raghavan and Roth's own arrangement is singular for
+   every x3 on arms whose axes 1 and 2 meet, such as the UR5, CRX-10iA and xArm6) and best
+   conditioned on sample poses.
+3. Each candidate is refined by Newton on the exact chain (:func:`dhkin.ik.compiled.chain.refine`)
+   and verified by FK at the tolerance; candidates that reach the same root are one (two roots
+   are one when the midpoint of their joint values verifies too).
+4. Joint limits and 2pi copies follow the families' rules (docs/ik_core.md, "The answer").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+from dhkin.dh import DHTable
+from dhkin.errors import FamilyError, InputError
+from dhkin.ik.general6r_elimination import Elimination
+from dhkin.ik.general6r_model import Model, _inverse, dh_row, refit
+from dhkin.ik.inputs import TWO_PI, check_tolerance
+from dhkin.ik.result import Configuration, IKSolutions
+from dhkin.tolerances import DEFAULT_TOLERANCE
+
+#: A candidate angle is taken from an eigenvalue whose half-angle arc tangent's imaginary
+#: part is at most this (rad). Rounding turns a double real root (a singular pose) into a
+#: complex pair whose imaginary part is ~sqrt(rounding), ~1e-8; near a fold, two real roots
+#: 0.1 rad apart in the chain can be a complex pair of the model. Spurious eigenvalues
+#: (x3 = +-i) lie at infinite imaginary angle. Candidates are cheap (Newton decides), so the
+#: band is wide.
+IMAGINARY_BAND = 0.1
+
+
+#: The free angles eliminated first: theta_k = shift + 2 atan(x3). An angle with no special
+#: value (0, pi/2, pi), so that a pose at theta_k = shift + pi (an eigenvalue at infinity,
+#: handled by QZ anyway) is unlikely.
+SHIFT = 0.5772156649015329
+
+
+#: Singular values of the 12 x 12 matrix polynomial at a generic x3 below this fraction of
+#: its norm mean the arrangement's polynomial is singular (its determinant vanishes for
+#: every x3): rounding alone leaves ~1e-16 there, a regular one ~1e-5 or more.
+SINGULAR_PENCIL = 1e-10
+
+
+@dataclass(frozen=True)
+class Arrangement:
+    """One way of eliminating: the chain's direction (``reversed``: tip to base) and the
+    eliminated joint ``k`` of the model (0-based)."""
+
+    reversed: bool
+    k: int
+
+
+class General6RSolver:
+    """Every solution of a six-revolute table (see the module docstring)."""
+
+    family = "general6r"
+
+    def __init__(self, table: DHTable, arrangement: Arrangement | None = None) -> None:
+        if table.dof != 6 or not all(j.is_revolute for j in table.joints):
+            raise FamilyError(f"{table.name}: the general 6R solver needs six revolute joints")
+        from dhkin.ik.plan import chain_array
+
+        self.table = table
+        self.dof = 6
+        self.chain = chain_array(table)
+        pre = np.tile(np.eye(4), (7, 1, 1))
+        for j in range(7):
+            pre[j, :3, :] = self.chain[j, :12].reshape(3, 4)
+        self.pre = pre
+        self.direction = self.chain[:6, 13].copy()
+        self.offset = self.chain[:6, 14].copy()
+        self._base_inverse = _inverse(table.base)
+        self._tool_inverse = _inverse(table.tool)
+        self.lever = max(1.0, float(np.max(np.abs(np.diff(
+            _frames_at_zero(pre)[:, :3, 3], axis=0)))))
+        if arrangement is None:
+            arrangement = choose_arrangement(self)
+        self.arrangement = arrangement
+        self.model, self.elimination = self._eliminator(arrangement)
+        self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
+
+    def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
+        pre = self.pre
+        if arrangement.reversed:
+            pre = np.stack([_inverse(pre[6 - i]) for i in range(7)])
+        model = refit(pre)
+        return model, Elimination(model, arrangement.k, SHIFT)
+
+    # -- candidates -----------------------------------------------------------------------
+
+    def candidates(self, T_dh: NDArray[np.float64], arrangement: Arrangement | None = None,
+                   elimination: Elimination | None = None) -> NDArray[np.float64]:
+        """Joint values (m, 6) of every near-real eigenvalue for the target T_dh (DH frame 0 ->
+        DH frame 6 of the exact chain), before refinement."""
+        arrangement = arrangement or self.arrangement
+        el = elimination or self.elimination
+        model = el.model
+        target = _inverse(T_dh) if arrangement.reversed else T_dh
+        H = _inverse(model.D0) @ target @ _inverse(model.E)
+        H[:3, 3] /= model.scale
+        A, B, C, Q, r = el.pencil(H)
+        n = 12
+        left = np.zeros((24, 24))
+        left[:n, n:] = np.eye(n)
+        left[n:, :n] = -C
+        left[n:, n:] = -B
+        right = np.eye(24)
+        right[n:, n:] = A
+        (alpha, beta), vectors = scipy.linalg.eig(left, right, homogeneous_eigvals=True,
+                                                  check_finite=False)
+        thetas = []
+        for index in range(24):
+            a, b = alpha[index], beta[index]
+            if abs(b) > abs(a) * 1e-300 and b != 0:
+                x = a / b
+                angle = 2.0 * np.arctan(x)
+                if not np.isfinite(angle) or abs(angle.imag) > IMAGINARY_BAND:
+                    continue
+                theta_k = el.shift + float(angle.real)
+                vector = vectors[:n, index] if abs(x) <= 1.0 else vectors[n:, index]
+            else:
+                theta_k = el.shift + math.pi
+                vector = vectors[n:, index]
+            top = vector[int(np.argmax(np.abs(vector)))]
+            m = (vector * (np.conj(top) / abs(top))).real.reshape(4, 3)
+            theta_1 = _ratio_angle(m, axis=0)
+            theta_2 = _ratio_angle(m, axis=1)
+            thetas.append(self._back_substitute(el, H, theta_k, theta_1, theta_2, Q, r))
+        if not thetas:
+            return np.zeros((0, 6))
+        theta = np.array(thetas)
+        v = theta - model.phi
+        if arrangement.reversed:
+            v = -v[:, ::-1]
+        return (v - self.offset) / self.direction
+
+    @staticmethod
+    def _back_substitute(el: Elimination, H: NDArray[np.float64], theta_k: float,
+                         theta_1: float, theta_2: float, Q: NDArray[np.float64],
+                         r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """All six model angles from the eliminated one and its two neighbours: the right
+        side's two joints from the 14 equations (least squares: Q y = P x - r), the dropped
+        joint from the orientation."""
+        k = el.k
+        basis = [np.array([math.cos(t), math.sin(t), 1.0]) for t in (theta_k, theta_1, theta_2)]
+        P = el.P[0] * basis[0][0] + el.P[1] * basis[0][1] + el.P[2]
+        y = np.linalg.lstsq(Q, P @ np.kron(basis[1], basis[2]) - r, rcond=None)[0]
+        theta = np.zeros(6)
+        theta[k], theta[k + 1], theta[k + 2] = theta_k, theta_1, theta_2
+        a, b = el.right_joints
+        theta[a] = math.atan2(y[5], y[2])
+        theta[b] = math.atan2(y[7], y[6])
+        g = el.dropped
+        before = np.eye(4)
+        for j in range(g):
+            before = before @ dh_row(theta[j], *el.rows[j])
+        after = np.eye(4)
+        for j in range(g + 1, 6):
+            after = after @ dh_row(theta[j], *el.rows[j])
+        A_g = _inverse(before) @ H @ _inverse(after)
+        theta[g] = math.atan2(A_g[1, 0], A_g[0, 0])
+        return theta
+
+    # -- solutions ------------------------------------------------------------------------
+
+    def target_dh(self, T: ArrayLike, tcp: ArrayLike | None = None) -> NDArray[np.float64]:
+        """base_link -> tool0 (or TCP) pose -> DH frame 0 -> DH frame 6 of the exact chain."""
+        target = np.asarray(T, dtype=float)
+        if target.shape != (4, 4) or not np.all(np.isfinite(target)):
+            raise InputError(f"T: expected a finite (4, 4) pose, got shape {target.shape}",
+                             field="T")
+        tool_inverse = self._tool_inverse
+        if tcp is not None:
+            tool_inverse = _inverse(np.asarray(tcp, dtype=float)) @ tool_inverse
+        return self._base_inverse @ target @ tool_inverse
+
+    def roots(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
+              tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+        """The verified, distinct solutions (k, 6) wrapped to (-pi, pi], their residuals
+        (k, 2), and how many candidates did not verify."""
+        from dhkin.ik.compiled.chain import SEED_DAMPING, check, refine
+
+        target = np.ascontiguousarray(T_dh[:3])
+        starts = list(self.candidates(T_dh))
+        seeded = len(starts)
+        if q_seed is not None:
+            starts.append(np.array(q_seed, dtype=float))
+        fixed = np.zeros(6, np.bool_)
+        state = np.empty(12)
+        found: list[NDArray[np.float64]] = []
+        errors: list[tuple[float, float]] = []
+        failed = 0
+        for index, start in enumerate(starts):
+            q = np.ascontiguousarray(start, dtype=float)
+            damping = SEED_DAMPING if index >= seeded else 0.0
+            refine(self.chain, target, q, fixed, tolerance, 120, 1e6, damping)
+            position, rotation = check(self.chain, q, target, state)
+            if not (position <= tolerance and rotation <= tolerance):
+                failed += index < seeded
+                continue
+            q = _wrap(q)
+            if any(self._same(q, other, target, tolerance, state) for other in found):
+                continue
+            found.append(q)
+            errors.append((position, rotation))
+        if not found:
+            return np.zeros((0, 6)), np.zeros((0, 2)), failed
+        return np.array(found), np.array(errors), failed
+
+    def _same(self, q: NDArray[np.float64], other: NDArray[np.float64],
+              target: NDArray[np.float64], tolerance: float, state: NDArray[np.float64]) -> bool:
+        """Whether two verified solutions are one root: close, and their midpoint verifies."""
+        from dhkin.ik.compiled.chain import MAX_JOINT_STEP, check
+
+        difference = _wrap(q - other)
+        if np.max(np.abs(difference)) > MAX_JOINT_STEP:
+            return False
+        position, rotation = check(self.chain, np.ascontiguousarray(other + 0.5 * difference),
+                                   target, state)
+        return bool(position <= tolerance and rotation <= tolerance)
+
+    def solve_one(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                  tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                  copies: bool = False) -> IKSolutions:
+        """Every solution of one pose within the joint limits: per root its in-limit 2pi copy
+        nearest ``q_seed`` (nearest 0 without one), or every copy with ``copies``."""
+        tolerance = check_tolerance(tolerance)
+        T_dh = self.target_dh(T, tcp)
+        seed = None if q_seed is None else np.asarray(q_seed, dtype=float)
+        if seed is not None and (seed.shape != (6,) or not np.all(np.isfinite(seed))):
+            raise InputError(field="q_seed", value=np.shape(seed), expected="6 finite values")
+        roots, errors, failed = self.roots(T_dh, seed, tolerance)
+        if roots.shape[0] == 0:
+            reason = ("no real solution: the elimination found no root that verifies on the "
+                      f"exact chain at tolerance {tolerance:g}")
+            if failed:
+                reason += f" ({failed} candidate(s) did not converge)"
+            return IKSolutions(q=np.zeros((0, 6)), family=self.family, reason=reason,
+                               dropped=failed)
+        reference = np.zeros(6) if seed is None else seed
+        rows, residuals = [], []
+        for q, error in zip(roots, errors, strict=True):
+            for copy in self._copies(q, reference, copies):
+                rows.append(copy)
+                residuals.append(error)
+        if not rows:
+            return IKSolutions(q=np.zeros((0, 6)), family=self.family,
+                               reason=f"{roots.shape[0]} solution(s) verified, but no 2pi copy "
+                                      "of any lies within the joint limits")
+        q_out = np.array(rows)
+        turns = np.rint(q_out / TWO_PI).astype(np.int64)
+        configurations = tuple(Configuration(labels=self.branch_labels[0], turns=tuple(t))
+                               for t in turns.tolist())
+        flags: tuple[frozenset[str], ...] = tuple(frozenset() for _ in rows)
+        return IKSolutions(q=q_out, configurations=configurations, flags=flags,
+                           residuals=np.array(residuals), family=self.family, dropped=failed)
+
+    def _copies(self, q: NDArray[np.float64], reference: NDArray[np.float64],
+                every: bool) -> list[NDArray[np.float64]]:
+        """The in-limit 2pi copies of q: the one nearest ``reference`` (per joint), or all."""
+        slack = 0.0
+        lower, upper = self.table.lower - slack, self.table.upper + slack
+        options = []
+        for j in range(6):
+            first = math.ceil((lower[j] - q[j]) / TWO_PI)
+            last = math.floor((upper[j] - q[j]) / TWO_PI)
+            values = [q[j] + TWO_PI * n for n in range(first, last + 1)]
+            if not values:
+                return []
+            if not every:
+                values = [values[int(np.argmin(np.abs(np.array(values) - reference[j])))]]
+            options.append(values)
+        grid = np.array(np.meshgrid(*options, indexing="ij")).reshape(6, -1).T
+        return list(grid)
+
+
+def _frames_at_zero(pre: NDArray[np.float64]) -> NDArray[np.float64]:
+    out = np.empty((7, 4, 4))
+    current = np.eye(4)
+    for j in range(7):
+        current = current @ pre[j]
+        out[j] = current
+    return out
+
+
+def _wrap(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Angles wrapped to (-pi, pi]."""
+    return np.asarray(-((-q + math.pi) % TWO_PI - math.pi))
+
+
+def _ratio_angle(m: NDArray[np.float64], axis: int) -> float:
+    """The angle whose half-angle tangent is the ratio of consecutive monomials along ``axis``
+    of m (4, 3) ~ x4^i x5^j: 2 atan2(next, this) on the pair of largest size."""
+    pairs = (m[:-1, :], m[1:, :]) if axis == 0 else (m[:, :-1], m[:, 1:])
+    size = pairs[0] ** 2 + pairs[1] ** 2
+    index = np.unravel_index(int(np.argmax(size)), size.shape)
+    return 2.0 * math.atan2(float(pairs[1][index]), float(pairs[0][index]))
+
+
+def choose_arrangement(solver: General6RSolver, poses: int = 12) -> Arrangement:
+    """The arrangement whose matrix polynomial is regular and which recovers the most sample
+    solutions (joint vectors drawn with a fixed seed; FK gives their poses) on the exact chain,
+    ties broken by the polynomial's conditioning."""
+    rng = np.random.default_rng(16)
+    samples = rng.uniform(-math.pi, math.pi, size=(poses, 6))
+    targets = [_inverse(solver.table.base) @ solver.table.fk(q) @ _inverse(solver.table.tool)
+               for q in samples]
+    best: tuple[float, float] | None = None
+    choice: Arrangement | None = None
+    for reversed_ in (False, True):
+        for k in (1, 2, 0):
+            arrangement = Arrangement(reversed_, k)
+            _, el = solver._eliminator(arrangement)
+            regular = _regularity(solver, el, targets[0], arrangement)
+            if regular < SINGULAR_PENCIL:
+                continue
+            recovered = 0
+            for q, T_dh in zip(samples, targets, strict=True):
+                cands = solver.candidates(T_dh, arrangement, el)
+                if cands.shape[0] and np.min(np.max(np.abs(_wrap(cands - q)), axis=1)) < 1e-6:
+                    recovered += 1
+            score = (recovered, regular)
+            if best is None or score > best:
+                best, choice = score, arrangement
+    if choice is None:
+        raise FamilyError(f"{solver.table.name}: every elimination's matrix polynomial is "
+                          "singular")
+    return choice
+
+
+def _regularity(solver: General6RSolver, el: Elimination, T_dh: NDArray[np.float64],
+                arrangement: Arrangement) -> float:
+    """Smallest singular value of M(x3) over its norm at two generic x3."""
+    model = el.model
+    target = _inverse(T_dh) if arrangement.reversed else T_dh
+    H = _inverse(model.D0) @ target @ _inverse(model.E)
+    H[:3, 3] /= model.scale
+    A, B, C, _, _ = el.pencil(H)
+    values = []
+    for x in (0.7, -1.3):
+        M = A * x * x + B * x + C
+        s = np.linalg.svd(M, compute_uv=False)
+        values.append(s[-1] / s[0])
+    return float(min(values))

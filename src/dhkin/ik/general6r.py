@@ -95,7 +95,36 @@ class General6RSolver:
             arrangement = choose_arrangement(self)
         self.arrangement = arrangement
         self.model, self.elimination = self._eliminator(arrangement)
+        self._data = self.kernel_data()
+        self._configurations: dict[tuple[int, ...], Configuration] = {}
         self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
+
+    def kernel_data(self, arrangement: Arrangement | None = None,
+                    elimination: Elimination | None = None) -> tuple[NDArray[np.float64], ...]:
+        """The compiled candidates' constant arguments (dhkin.ik.compiled.general6r)."""
+        from dhkin.ik.general6r_elimination import _HALF2, _V_INV
+
+        arrangement = arrangement or self.arrangement
+        el = elimination or self.elimination
+        model = el.model
+        before, after = el.sample_factors()
+        rows = np.array(el.rows)
+        setup = np.array([el.shift, el.k, float(arrangement.reversed), model.scale,
+                          IMAGINARY_BAND])
+        return (np.ascontiguousarray(el.P), before, after, np.kron(_V_INV, _V_INV),
+                np.ascontiguousarray(el.mix), np.ascontiguousarray(_HALF2), rows,
+                model.phi.copy(), _inverse(model.D0), _inverse(model.E), setup,
+                self.direction, self.offset)
+
+    def compiled_candidates(self, T_dh: NDArray[np.float64],
+                            data: tuple[NDArray[np.float64], ...] | None = None
+                            ) -> NDArray[np.float64]:
+        """:meth:`candidates`, compiled (the same values)."""
+        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
+
+        out = np.empty((MAX_CANDIDATES, 6))
+        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out)
+        return out[:count]
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
         pre = self.pre
@@ -196,34 +225,20 @@ class General6RSolver:
               tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
         """The verified, distinct solutions (k, 6) wrapped to (-pi, pi], their residuals
         (k, 2), and how many candidates did not verify."""
-        from dhkin.ik.compiled.chain import SEED_DAMPING, check, refine
+        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates, settle
 
-        target = np.ascontiguousarray(T_dh[:3])
-        starts = list(self.candidates(T_dh))
-        seeded = len(starts)
+        target = np.ascontiguousarray(T_dh)
+        starts = np.empty((MAX_CANDIDATES, 6))
+        count = candidates(*self._data, target, starts)
+        seeded = count
         if q_seed is not None:
-            starts.append(np.array(q_seed, dtype=float))
-        fixed = np.zeros(6, np.bool_)
-        state = np.empty(12)
-        found: list[NDArray[np.float64]] = []
-        errors: list[tuple[float, float]] = []
-        failed = 0
-        for index, start in enumerate(starts):
-            q = np.ascontiguousarray(start, dtype=float)
-            damping = SEED_DAMPING if index >= seeded else 0.0
-            refine(self.chain, target, q, fixed, tolerance, 120, 1e6, damping)
-            position, rotation = check(self.chain, q, target, state)
-            if not (position <= tolerance and rotation <= tolerance):
-                failed += index < seeded
-                continue
-            q = _wrap(q)
-            if any(self._same(q, other, target, tolerance, state) for other in found):
-                continue
-            found.append(q)
-            errors.append((position, rotation))
-        if not found:
-            return np.zeros((0, 6)), np.zeros((0, 2)), failed
-        return np.array(found), np.array(errors), failed
+            starts[count] = q_seed
+            count += 1
+        roots = np.empty((MAX_CANDIDATES, 6))
+        errors = np.empty((MAX_CANDIDATES, 2))
+        found, failed = settle(self.chain, target, starts, count, seeded, tolerance, roots,
+                               errors)
+        return roots[:found], errors[:found], failed
 
     def _same(self, q: NDArray[np.float64], other: NDArray[np.float64],
               target: NDArray[np.float64], tolerance: float, state: NDArray[np.float64]) -> bool:
@@ -256,22 +271,42 @@ class General6RSolver:
             return IKSolutions(q=np.zeros((0, 6)), family=self.family, reason=reason,
                                dropped=failed)
         reference = np.zeros(6) if seed is None else seed
-        rows, residuals = [], []
-        for q, error in zip(roots, errors, strict=True):
-            for copy in self._copies(q, reference, copies):
-                rows.append(copy)
-                residuals.append(error)
-        if not rows:
+        if copies:
+            blocks = [(np.array(self._copies(q, reference, True)), error)
+                      for q, error in zip(roots, errors, strict=True)]
+            kept = [(b, e) for b, e in blocks if b.shape[0]]
+            q_out = (np.concatenate([b for b, _ in kept]) if kept else np.zeros((0, 6)))
+            residuals = (np.concatenate([np.tile(e, (b.shape[0], 1)) for b, e in kept])
+                         if kept else np.zeros((0, 2)))
+        else:
+            q_out, inside = self._nearest_copies(roots, reference)
+            q_out, residuals = q_out[inside], errors[inside]
+        if q_out.shape[0] == 0:
             return IKSolutions(q=np.zeros((0, 6)), family=self.family,
                                reason=f"{roots.shape[0]} solution(s) verified, but no 2pi copy "
                                       "of any lies within the joint limits")
-        q_out = np.array(rows)
-        turns = np.rint(q_out / TWO_PI).astype(np.int64)
-        configurations = tuple(Configuration(labels=self.branch_labels[0], turns=tuple(t))
-                               for t in turns.tolist())
-        flags: tuple[frozenset[str], ...] = tuple(frozenset() for _ in rows)
-        return IKSolutions(q=q_out, configurations=configurations, flags=flags,
-                           residuals=np.array(residuals), family=self.family, dropped=failed)
+        turns = np.rint(q_out / TWO_PI).astype(np.int64).tolist()
+        configurations = tuple(self._configuration(tuple(t)) for t in turns)
+        return IKSolutions(q=q_out, configurations=configurations,
+                           flags=(frozenset(),) * q_out.shape[0],
+                           residuals=residuals, family=self.family, dropped=failed)
+
+    def _configuration(self, turns: tuple[int, ...]) -> Configuration:
+        found = self._configurations.get(turns)
+        if found is None:
+            found = Configuration(labels=self.branch_labels[0], turns=turns)
+            self._configurations[turns] = found
+        return found
+
+    def _nearest_copies(self, roots: NDArray[np.float64], reference: NDArray[np.float64]
+                        ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Per root, per joint the 2pi copy nearest ``reference`` within the limits, and
+        whether every joint has one."""
+        lower, upper = self.table.lower, self.table.upper
+        q = roots + TWO_PI * np.rint((reference - roots) / TWO_PI)
+        q = np.where(q < lower, q + TWO_PI * np.ceil((lower - q) / TWO_PI), q)
+        q = np.where(q > upper, q - TWO_PI * np.ceil((q - upper) / TWO_PI), q)
+        return q, np.all((q >= lower) & (q <= upper), axis=1)
 
     def _copies(self, q: NDArray[np.float64], reference: NDArray[np.float64],
                 every: bool) -> list[NDArray[np.float64]]:

@@ -114,6 +114,23 @@ class Elimination:
         # after: A_5^-1 A_4^-1)
         return before @ H @ after @ self._dropped_inverse
 
+    def sample_factors(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(before, after) (9, 4, 4): the right side at sample (a, b), index 3 a + b, is
+        before @ H @ after (the dropped joint's inverse at angle 0 included in after)."""
+        before = np.empty((9, 4, 4))
+        after = np.empty((9, 4, 4))
+        for a in range(3):
+            for b in range(3):
+                left, right = np.eye(4), np.eye(4)
+                for joint, sample in zip(self.right_joints, (a, b), strict=True):
+                    if joint < self.k:
+                        left = self._inverses[joint][sample] @ left
+                    else:
+                        right = self._inverses[joint][sample] @ right
+                before[3 * a + b] = left
+                after[3 * a + b] = right @ self._dropped_inverse
+        return before, after
+
     def right(self, H: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Q (14, 8) and r (14,) of the target H (model frame 0 -> 6, scaled lengths)."""
         values = np.empty((9, 14))

@@ -111,7 +111,8 @@ class General6RSolver:
         rows = np.array(el.rows)
         setup = np.array([el.shift, el.k, float(arrangement.reversed), model.scale,
                           IMAGINARY_BAND])
-        return (np.ascontiguousarray(el.P), before, after, np.kron(_V_INV, _V_INV),
+        right_inverse = np.asarray(np.kron(_V_INV, _V_INV), dtype=np.float64)
+        return (np.ascontiguousarray(el.P), before, after, right_inverse,
                 np.ascontiguousarray(el.mix), np.ascontiguousarray(_HALF2), rows,
                 model.phi.copy(), _inverse(model.D0), _inverse(model.E), setup,
                 self.direction, self.offset)
@@ -306,7 +307,8 @@ class General6RSolver:
         q = roots + TWO_PI * np.rint((reference - roots) / TWO_PI)
         q = np.where(q < lower, q + TWO_PI * np.ceil((lower - q) / TWO_PI), q)
         q = np.where(q > upper, q - TWO_PI * np.ceil((q - upper) / TWO_PI), q)
-        return q, np.all((q >= lower) & (q <= upper), axis=1)
+        inside: NDArray[np.bool_] = np.all((q >= lower) & (q <= upper), axis=1)
+        return q, inside
 
     def _copies(self, q: NDArray[np.float64], reference: NDArray[np.float64],
                 every: bool) -> list[NDArray[np.float64]]:

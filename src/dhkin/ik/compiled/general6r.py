@@ -231,7 +231,7 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
 def _safe_inverse(M: NDArray[np.float64]) -> NDArray[np.float64]:
     """M^-1, or infinities where M is exactly singular (its condition is then 0)."""
     try:
-        return np.linalg.inv(M)
+        return np.asarray(np.linalg.inv(M), dtype=np.float64)
     except Exception:
         return np.full((12, 12), np.inf)
 

@@ -31,14 +31,9 @@ def _default_reference_dir() -> Path | None:
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
-    from dhkin.errors import FamilyError
-
     for name in builtin_names():
         robot = load(name)
-        try:
-            family = robot.ik_solver.family
-        except FamilyError:
-            family = "no closed form"
+        family = robot.ik_family
         print(f"{name:20s} {robot.dof} joints  {robot.table.convention:8s}  {family:16s} "
               f"{robot.table.description}")
     return EXIT_OK

@@ -34,8 +34,8 @@ from dhkin.dh import DHTable
 from dhkin.errors import FamilyError, InputError
 from dhkin.ik.general6r_elimination import Elimination
 from dhkin.ik.general6r_model import Model, _inverse, dh_row, refit
-from dhkin.ik.inputs import TWO_PI, check_tolerance
-from dhkin.ik.result import Configuration, IKSolutions
+from dhkin.ik.inputs import TWO_PI, as_targets, check_tolerance, pose_error_message
+from dhkin.ik.result import FLAG_NAMES, Configuration, IKBatch, IKSolutions
 from dhkin.tolerances import DEFAULT_TOLERANCE
 
 #: A candidate angle is taken from an eigenvalue whose half-angle arc tangent's imaginary
@@ -91,6 +91,10 @@ class General6RSolver:
         self._tool_inverse = _inverse(table.tool)
         self.lever = max(1.0, float(np.max(np.abs(np.diff(
             _frames_at_zero(pre)[:, :3, 3], axis=0)))))
+        #: The exact chain to tool0 (the point verified; ``chain`` ends at DH frame 6).
+        self.tip_chain = self.chain.copy()
+        self.tip_chain[6, :12] = (pre[6] @ table.tool)[:3].ravel()
+        self.tip_lever = self.lever + float(np.linalg.norm(table.tool[:3, 3]))
         if arrangement is None:
             arrangement = choose_arrangement(self)
         self.arrangement = arrangement
@@ -222,75 +226,204 @@ class General6RSolver:
             tool_inverse = _inverse(np.asarray(tcp, dtype=float)) @ tool_inverse
         return self._base_inverse @ target @ tool_inverse
 
+    @staticmethod
+    def _pose(T: ArrayLike, name: str) -> tuple[NDArray[np.float64], float]:
+        """A pose checked and projected as the families do (docs/ik_core.md, "Input poses as
+        they come"): the pose with its rotation block the nearest rotation, and how far that
+        moved it (Frobenius norm); InputError naming ``name`` otherwise."""
+        from dhkin.ik.compiled.pose import project, status
+
+        try:
+            target = np.ascontiguousarray(T, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{name}: expected a (4, 4) pose of numbers ({exc})",
+                             field=name) from exc
+        if target.shape != (4, 4):
+            raise InputError(f"{name}: expected a (4, 4) pose, got shape {np.shape(T)}",
+                             field=name)
+        code = int(status(target))
+        if code:
+            raise InputError(pose_error_message(name, target, code), field=name)
+        out = np.eye(4)
+        projection = float(project(target, out[:3]))
+        return out, projection
+
+    def _seed(self, q_seed: ArrayLike | None) -> NDArray[np.float64] | None:
+        if q_seed is None:
+            return None
+        try:
+            seed = np.asarray(q_seed, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"q_seed: expected 6 finite numbers ({exc})",
+                             field="q_seed") from exc
+        if seed.shape == (1, 6):
+            seed = seed[0]
+        if seed.shape != (6,) or not np.all(np.isfinite(seed)):
+            raise InputError(field="q_seed", value=np.shape(seed), expected="6 finite values")
+        return np.ascontiguousarray(seed)
+
+    def _tip(self, tcp: ArrayLike | None) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                   float]:
+        """The exact chain to the point verified (tool0, or the TCP), (tool @ tcp)^-1, and the
+        verification tolerance's lever (see :meth:`verification_tolerance`)."""
+        if tcp is None:
+            return self.tip_chain, self._tool_inverse, self.tip_lever
+        frame, _ = self._pose(tcp, "tcp")
+        tool = self.table.tool @ frame
+        chain = self.chain.copy()
+        chain[6, :12] = (self.pre[6] @ tool)[:3].ravel()
+        lever = max(self.tip_lever, self.lever + float(np.linalg.norm(tool[:3, 3])))
+        return chain, _inverse(tool), lever
+
+    @staticmethod
+    def verification_tolerance(tolerance: float, lever: float) -> float:
+        """The tolerance solutions are verified at on our FK: ``tolerance`` less the FK rounding
+        margin (dhkin.ik.compiled.plan.FK_ROUNDING per metre of lever), as in the families, so
+        that a solution verified on our FK is within ``tolerance`` on the oracle's too."""
+        from dhkin.ik.compiled.plan import FK_ROUNDING
+
+        return max(tolerance - FK_ROUNDING * lever, 0.5 * tolerance)
+
     def roots(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
               tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
-        """The verified, distinct solutions (k, 6) wrapped to (-pi, pi], their residuals
-        (k, 2), and how many candidates did not verify."""
+        """The verified, distinct solutions (k, 6) wrapped to (-pi, pi] for the target T_dh (DH
+        frame 0 -> DH frame 6), their residuals there (k, 2), and how many candidates did not
+        verify."""
+        return self._roots(T_dh, T_dh, self.chain, q_seed, tolerance)
+
+    def _roots(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
+               chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
+               tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+        """:meth:`roots`, refined and verified on ``chain`` against ``tip_target`` (DH frame
+        0 -> the chain's last frame)."""
         from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates, settle
 
-        target = np.ascontiguousarray(T_dh)
         starts = np.empty((MAX_CANDIDATES, 6))
-        count = candidates(*self._data, target, starts)
+        count = candidates(*self._data, np.ascontiguousarray(T_dh), starts)
         seeded = count
         if q_seed is not None:
             starts[count] = q_seed
             count += 1
         roots = np.empty((MAX_CANDIDATES, 6))
         errors = np.empty((MAX_CANDIDATES, 2))
-        found, failed = settle(self.chain, target, starts, count, seeded, tolerance, roots,
-                               errors)
+        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, count, seeded,
+                               tolerance, roots, errors)
         return roots[:found], errors[:found], failed
-
-    def _same(self, q: NDArray[np.float64], other: NDArray[np.float64],
-              target: NDArray[np.float64], tolerance: float, state: NDArray[np.float64]) -> bool:
-        """Whether two verified solutions are one root: close, and their midpoint verifies."""
-        from dhkin.ik.compiled.chain import MAX_JOINT_STEP, check
-
-        difference = _wrap(q - other)
-        if np.max(np.abs(difference)) > MAX_JOINT_STEP:
-            return False
-        position, rotation = check(self.chain, np.ascontiguousarray(other + 0.5 * difference),
-                                   target, state)
-        return bool(position <= tolerance and rotation <= tolerance)
 
     def solve_one(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                   tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
                   copies: bool = False) -> IKSolutions:
         """Every solution of one pose within the joint limits: per root its in-limit 2pi copy
-        nearest ``q_seed`` (nearest 0 without one), or every copy with ``copies``."""
+        nearest ``q_seed`` (nearest 0 without one), or every copy with ``copies``. Inputs are
+        checked as by the families (:class:`dhkin.ik.solver.ClosedFormSolver`); solutions are
+        verified by FK at the TCP (tool0, or ``tcp``)."""
         tolerance = check_tolerance(tolerance)
-        T_dh = self.target_dh(T, tcp)
-        seed = None if q_seed is None else np.asarray(q_seed, dtype=float)
-        if seed is not None and (seed.shape != (6,) or not np.all(np.isfinite(seed))):
-            raise InputError(field="q_seed", value=np.shape(seed), expected="6 finite values")
-        roots, errors, failed = self.roots(T_dh, seed, tolerance)
+        target, projection = self._pose(T, "T")
+        return self._solve(target, projection, self._seed(q_seed), tolerance, self._tip(tcp),
+                           copies)
+
+    def _solve(self, target: NDArray[np.float64], projection: float,
+               seed: NDArray[np.float64] | None, tolerance: float,
+               tip: tuple[NDArray[np.float64], NDArray[np.float64], float],
+               copies: bool) -> IKSolutions:
+        """:meth:`solve_one` of a checked, projected pose."""
+        chain, tool_inverse, lever = tip
+        tip_target = self._base_inverse @ target
+        T_dh = tip_target @ tool_inverse
+        roots, errors, failed = self._roots(T_dh, tip_target, chain, seed,
+                                            self.verification_tolerance(tolerance, lever))
         if roots.shape[0] == 0:
             reason = ("no real solution: the elimination found no root that verifies on the "
                       f"exact chain at tolerance {tolerance:g}")
             if failed:
                 reason += f" ({failed} candidate(s) did not converge)"
             return IKSolutions(q=np.zeros((0, 6)), family=self.family, reason=reason,
-                               dropped=failed)
+                               dropped=failed, projection=projection)
+        flags = self._flags(roots)
         reference = np.zeros(6) if seed is None else seed
+        slack = tolerance / lever
         if copies:
-            blocks = [(np.array(self._copies(q, reference, True)), error)
-                      for q, error in zip(roots, errors, strict=True)]
-            kept = [(b, e) for b, e in blocks if b.shape[0]]
-            q_out = (np.concatenate([b for b, _ in kept]) if kept else np.zeros((0, 6)))
-            residuals = (np.concatenate([np.tile(e, (b.shape[0], 1)) for b, e in kept])
-                         if kept else np.zeros((0, 2)))
+            blocks = [(np.array(self._copies(q, reference, True, slack)).reshape(-1, 6),
+                       error, flag)
+                      for q, error, flag in zip(roots, errors, flags, strict=True)]
+            q_out = np.concatenate([b for b, _, _ in blocks])
+            residuals = np.concatenate([np.tile(e, (b.shape[0], 1)) for b, e, _ in blocks])
+            out_flags = [f for b, _, f in blocks for _ in range(b.shape[0])]
         else:
-            q_out, inside = self._nearest_copies(roots, reference)
+            q_out, inside = self._nearest_copies(roots, reference, slack)
             q_out, residuals = q_out[inside], errors[inside]
+            out_flags = [f for f, keep in zip(flags, inside, strict=True) if keep]
+        q_out, residuals, out_flags = self._onto_limits(q_out, residuals, out_flags, chain,
+                                                        tip_target, tolerance, lever)
         if q_out.shape[0] == 0:
-            return IKSolutions(q=np.zeros((0, 6)), family=self.family,
+            return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
+                               dropped=failed,
                                reason=f"{roots.shape[0]} solution(s) verified, but no 2pi copy "
                                       "of any lies within the joint limits")
         turns = np.rint(q_out / TWO_PI).astype(np.int64).tolist()
         configurations = tuple(self._configuration(tuple(t)) for t in turns)
-        return IKSolutions(q=q_out, configurations=configurations,
-                           flags=(frozenset(),) * q_out.shape[0],
-                           residuals=residuals, family=self.family, dropped=failed)
+        return IKSolutions(q=q_out, configurations=configurations, flags=tuple(out_flags),
+                           residuals=residuals, family=self.family, dropped=failed,
+                           projection=projection)
+
+    def _flags(self, roots: NDArray[np.float64]) -> list[frozenset[str]]:
+        """The singularity flags of each root (none yet)."""
+        return [frozenset()] * roots.shape[0]
+
+    def solve_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                    tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                    copies: bool = False, chunk_size: int = 65536,
+                    workers: int | None = None) -> IKBatch:
+        """:meth:`solve_one` pose by pose (a loop: ``chunk_size`` and ``workers`` are accepted
+        for the families' signature and checked, but do not apply), padded to the largest
+        count; ``q_seed`` (6,) or (N, 6). ``branch`` is 0 for every solution (the general
+        solver has one branch label set, empty: its roots have no family labels)."""
+        from dhkin.ik.inputs import _check_chunk
+        from dhkin.ik.workers import check_workers
+
+        tolerance = check_tolerance(tolerance)
+        _check_chunk(chunk_size)
+        check_workers(workers)
+        targets, _ = as_targets(T)
+        n_poses = targets.shape[0]
+        seeds: list[NDArray[np.float64] | None]
+        if q_seed is None:
+            seeds = [None] * n_poses
+        else:
+            array = np.asarray(q_seed, dtype=float)
+            if array.shape == (6,):
+                array = array[None]
+            if array.shape not in ((1, 6), (n_poses, 6)) or not np.all(np.isfinite(array)):
+                raise InputError(f"q_seed: expected finite values of shape (6,) or "
+                                 f"({n_poses}, 6), got shape {np.shape(q_seed)}",
+                                 field="q_seed")
+            seeds = [array[0]] * n_poses if array.shape[0] == 1 else list(array)
+        tip = self._tip(tcp)
+        results = []
+        for index in range(n_poses):
+            target, projection = self._pose(targets[index], f"T[{index}]")
+            results.append(self._solve(target, projection, seeds[index], tolerance, tip,
+                                       copies))
+        width = max([len(r) for r in results], default=0)
+        q = np.zeros((n_poses, width, 6))
+        valid = np.zeros((n_poses, width), np.bool_)
+        flags = np.zeros((n_poses, width), np.uint8)
+        branch = np.full((n_poses, width), -1, np.int16)
+        residuals = np.zeros((n_poses, width, 2))
+        bits = {name: bit for bit, name in FLAG_NAMES.items()}
+        for index, result in enumerate(results):
+            count = len(result)
+            q[index, :count] = result.q
+            valid[index, :count] = True
+            branch[index, :count] = 0
+            residuals[index, :count] = result.residuals
+            for slot, names in enumerate(result.flags):
+                flags[index, slot] = sum(bits[name] for name in names)
+        return IKBatch(q=q, valid=valid, flags=flags, branch=branch,
+                       branch_labels=self.branch_labels, family=self.family,
+                       residuals=residuals,
+                       projection=np.array([r.projection for r in results]),
+                       dropped=np.array([r.dropped for r in results], np.int64))
 
     def _configuration(self, turns: tuple[int, ...]) -> Configuration:
         found = self._configurations.get(turns)
@@ -299,11 +432,11 @@ class General6RSolver:
             self._configurations[turns] = found
         return found
 
-    def _nearest_copies(self, roots: NDArray[np.float64], reference: NDArray[np.float64]
-                        ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-        """Per root, per joint the 2pi copy nearest ``reference`` within the limits, and
-        whether every joint has one."""
-        lower, upper = self.table.lower, self.table.upper
+    def _nearest_copies(self, roots: NDArray[np.float64], reference: NDArray[np.float64],
+                        slack: float) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Per root, per joint the 2pi copy nearest ``reference`` within the limits widened by
+        ``slack``, and whether every joint has one."""
+        lower, upper = self.table.lower - slack, self.table.upper + slack
         q = roots + TWO_PI * np.rint((reference - roots) / TWO_PI)
         q = np.where(q < lower, q + TWO_PI * np.ceil((lower - q) / TWO_PI), q)
         q = np.where(q > upper, q - TWO_PI * np.ceil((q - upper) / TWO_PI), q)
@@ -311,9 +444,9 @@ class General6RSolver:
         return q, inside
 
     def _copies(self, q: NDArray[np.float64], reference: NDArray[np.float64],
-                every: bool) -> list[NDArray[np.float64]]:
-        """The in-limit 2pi copies of q: the one nearest ``reference`` (per joint), or all."""
-        slack = 0.0
+                every: bool, slack: float) -> list[NDArray[np.float64]]:
+        """The 2pi copies of q within the limits widened by ``slack``: the one nearest
+        ``reference`` (per joint), or all."""
         lower, upper = self.table.lower - slack, self.table.upper + slack
         options = []
         for j in range(6):
@@ -327,6 +460,31 @@ class General6RSolver:
             options.append(values)
         grid = np.array(np.meshgrid(*options, indexing="ij")).reshape(6, -1).T
         return list(grid)
+
+    def _onto_limits(self, q: NDArray[np.float64], residuals: NDArray[np.float64],
+                     flags: list[frozenset[str]], chain: NDArray[np.float64],
+                     tip_target: NDArray[np.float64], tolerance: float, lever: float
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], list[frozenset[str]]]:
+        """As in the families (docs/ik_core.md, "limits"): a value within tolerance / lever
+        outside a joint limit counts as on it: it is set onto the limit and verified again
+        (dropped if it no longer verifies)."""
+        clipped = np.clip(q, self.table.lower, self.table.upper)
+        moved = np.flatnonzero(np.any(clipped != q, axis=1))
+        if moved.size == 0:
+            return q, residuals, flags
+        from dhkin.ik.compiled.chain import check
+
+        verify = self.verification_tolerance(tolerance, lever)
+        target = np.ascontiguousarray(tip_target[:3])
+        state = np.empty(12)
+        keep = np.ones(q.shape[0], np.bool_)
+        residuals = residuals.copy()
+        for row in moved:
+            position, rotation = check(chain, np.ascontiguousarray(clipped[row]), target, state)
+            keep[row] = position <= verify and rotation <= verify
+            residuals[row] = position, rotation
+        return (clipped[keep], residuals[keep],
+                [f for f, k in zip(flags, keep, strict=True) if k])
 
 
 def _frames_at_zero(pre: NDArray[np.float64]) -> NDArray[np.float64]:

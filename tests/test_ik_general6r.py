@@ -117,3 +117,128 @@ def test_same_solutions_as_the_family_solver(name: str) -> None:
         a = np.array(sorted(map(tuple, np.round(_wrap(family.q), 6))))
         b = np.array(sorted(map(tuple, np.round(_wrap(general.q), 6))))
         assert np.max(np.abs(_wrap(a - b))) < 1e-5
+
+
+# --------------------------------------------------------------------------------------------
+# robot.ik: the general solver answers six-revolute arms without a family
+
+
+def test_robot_ik_uses_the_general_solver() -> None:
+    """CRX-10iA and xArm6 (no family): robot.ik, ik_batch and ik_batch_detailed answer with
+    every solution (family "general6r", not numerical), the same pose by pose; rounded
+    rotations are projected; a TCP is verified at the TCP; bad inputs raise InputError."""
+    from dhkin.errors import InputError
+
+    for name in ("fanuc_crx10ia", "xarm6"):
+        robot = dhkin.load(name)
+        assert robot.ik_family == "general6r" and robot.complete_ik and not robot.has_closed_form
+        Q = robot.table.random_q(5, np.random.default_rng(19))
+        targets = robot.fk(Q)
+        batch = robot.ik_batch_detailed(targets, Q)
+        for k, (q, T) in enumerate(zip(Q, targets, strict=True)):
+            result = robot.ik(T, q)
+            assert result.family == "general6r" and not result.numerical and len(result) >= 2
+            assert np.abs(result.nearest(q) - q).max() <= 1e-6
+            assert np.array_equal(batch.q[k, batch.valid[k]], result.q)
+            rounded = np.round(T, 6)
+            projected = robot.ik(rounded, q)
+            assert projected.projection > 0 and len(projected) > 0
+        tcp = np.eye(4)
+        tcp[:3, 3] = [0.05, -0.02, 0.3]
+        q = Q[0]
+        result = robot.ik(robot.fk(q) @ tcp, q, tcp=tcp)
+        position, rotation = pose_errors(robot.reference().fk(result.q) @ tcp,
+                                         np.repeat((robot.fk(q) @ tcp)[None], len(result), 0))
+        assert max(position.max(), rotation.max()) <= DEFAULT_TOLERANCE
+        with pytest.raises(InputError, match="bottom row"):
+            robot.ik(np.zeros((4, 4)))
+        with pytest.raises(InputError, match="q_seed"):
+            robot.ik(robot.fk(q), [0.0] * 5)
+    far = np.eye(4)
+    far[:3, 3] = [5.0, 0.0, 0.0]
+    empty = dhkin.load("xarm6").ik(far)
+    assert len(empty) == 0 and "no real solution" in empty.reason
+
+
+def _fold(robot: Robot, sigma: float) -> np.ndarray:
+    """A joint vector of the CRX-10iA whose Jacobian's scaled smallest singular value is
+    ``sigma`` (joint 2 moved towards a fold by bisection)."""
+    from dhkin.ik.compiled.general6r import smallest_singular
+
+    solver = robot.general_solver
+    assert solver is not None
+
+    def measure(value: float) -> float:
+        q = np.array([0.3, value, 1.1, 0.2, 0.8, -0.5])
+        return float(smallest_singular(solver.tip_chain, q, solver.tip_lever, np.inf))
+
+    low, high = -0.2285349, 0.0  # the fold (sigma 0) lies at q2 = -0.228535 (measured)
+    assert measure(low) < sigma < measure(high)
+    for _ in range(80):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if measure(middle) < sigma else (low, middle)
+    return np.array([0.3, high, 1.1, 0.2, 0.8, -0.5])
+
+
+@pytest.mark.parametrize("factor", [0.8, 1.25])
+def test_singular_flag_at_the_edge_of_its_band(factor: float) -> None:
+    """A root is flagged "singular" exactly when its Jacobian's smallest singular value is
+    within the band sqrt(tolerance) (dhkin.ik.general6r.singular_band): at 0.8 and 1.25 times
+    the band, near a fold of the CRX-10iA."""
+    from dhkin.ik.general6r import singular_band
+
+    robot = dhkin.load("fanuc_crx10ia")
+    q = _fold(robot, factor * singular_band(DEFAULT_TOLERANCE))
+    result = robot.ik(robot.fk(q), q)
+    nearest = int(np.argmin(np.abs(_wrap(result.q - q)).max(axis=1)))
+    assert np.abs(result.q[nearest] - q).max() <= 1e-6
+    assert ("singular" in result.flags[nearest]) == (factor < 1.0)
+
+
+def _free_pose(robot: Robot, start: np.ndarray) -> np.ndarray:
+    """Joint values where axis 6 lies on axis 1 (q1 and q6 then move one rotation): found by
+    least squares on joints 2-5 (fixed seed)."""
+    import scipy.optimize
+
+    from dhkin.ik.compiled.chain import fk_frames
+
+    solver = robot.general_solver
+    assert solver is not None
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        frames = np.empty((7, 12))
+        fk_frames(solver.tip_chain, np.array([start[0], *x, start[5]]), frames)
+        z1, o1 = frames[0, [2, 6, 10]], frames[0, [3, 7, 11]]
+        z6, o6 = frames[5, [2, 6, 10]], frames[5, [3, 7, 11]]
+        return np.concatenate([np.cross(z1, z6), np.cross(o6 - o1, z1)])
+
+    fit = scipy.optimize.least_squares(residual, start[1:5], xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    q = np.array([start[0], *fit.x, start[5]])
+    assert fit.cost < 1e-28 and robot.table.in_limits(q[None])[0]
+    return q
+
+
+@pytest.mark.parametrize(("name", "start"), [
+    ("fanuc_crx10ia", [0.3, 0.2, 1.9, 1.5, 0.1, -0.5]),
+    ("xarm6", [0.3, 0.4, 0.1, 0.1, 2.7, -0.5]),
+])
+def test_a_free_joint_follows_the_seed(name: str, start: list[float]) -> None:
+    """Axis 6 on axis 1: only q1 -/+ q6 is determined. The answer nearest the seed is the
+    member of that family nearest the seed (q1 and q6 each move by half the seed's offset on
+    q1, one way or the other), exact and flagged "singular", continuous in the seed."""
+    robot = dhkin.load(name)
+    q = _free_pose(robot, np.array(start))
+    T = robot.fk(q)
+    for shift in (0.0, 0.2, -0.3, 0.25):
+        seed = q.copy()
+        seed[0] += shift
+        result = robot.ik(T, seed)
+        nearest = int(np.argmin(np.linalg.norm(result.q - seed, axis=1)))
+        chosen = result.q[nearest]
+        assert "singular" in result.flags[nearest]
+        assert chosen[0] - q[0] == pytest.approx(shift / 2, abs=1e-9)
+        assert abs(chosen[5] - q[5]) == pytest.approx(abs(shift) / 2, abs=1e-9)
+        assert np.abs(chosen[1:5] - q[1:5]).max() <= 1e-9
+        position, rotation = pose_errors(robot.reference().fk(result.q),
+                                         np.repeat(T[None], len(result), axis=0))
+        assert max(position.max(), rotation.max()) <= DEFAULT_TOLERANCE

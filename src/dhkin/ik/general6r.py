@@ -59,6 +59,23 @@ SHIFT = 0.5772156649015329
 SINGULAR_PENCIL = 1e-10
 
 
+def singular_band(tolerance: float) -> float:
+    """A root is flagged "singular" when the smallest singular value sigma of its Jacobian
+    (linear rows divided by the lever, so that rad and m/lever weigh alike) is at most
+    sqrt(tolerance): a step delta along the weakest direction moves the pose by about
+    sigma delta + delta^2 / 2 (curvature ~1 per rad on the scaled chain), so with sigma <=
+    sqrt(tolerance) every point within ~sqrt(tolerance) rad of the root along that direction
+    verifies as well: at the tolerance the pose cannot be told from a singular one (a double
+    root, or a curve of solutions where a joint is free). 3.2e-5 at the default 1e-9."""
+    return math.sqrt(tolerance)
+
+
+#: The seed's member of a curve of solutions (a joint free at a singular pose) is followed by
+#: at most this many steps along the Jacobian's weak directions towards the seed, each refined
+#: back onto the solutions by Newton and kept only when it verifies and is nearer the seed.
+SEED_STEPS = 12
+
+
 @dataclass(frozen=True)
 class Arrangement:
     """One way of eliminating: the chain's direction (``reversed``: tip to base) and the
@@ -128,7 +145,7 @@ class General6RSolver:
         from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
 
         out = np.empty((MAX_CANDIDATES, 6))
-        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out)
+        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out, np.empty(1))
         return out[:count]
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
@@ -296,19 +313,40 @@ class General6RSolver:
                tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
         """:meth:`roots`, refined and verified on ``chain`` against ``tip_target`` (DH frame
         0 -> the chain's last frame)."""
-        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates, settle
+        roots, errors, failed, _ = self._settled(T_dh, tip_target, chain, q_seed, tolerance,
+                                                 self.lever)
+        return roots, errors, failed
+
+    def _settled(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
+                 chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
+                 tolerance: float, lever: float
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, NDArray[np.bool_]]:
+        """:meth:`_roots` and whether each root is singular (:func:`singular_band`, or the
+        pose's eigenproblem ill-conditioned: no leading matrix reached LEAD_CONDITION)."""
+        from dhkin.ik.compiled.general6r import (
+            LEAD_CONDITION,
+            MAX_CANDIDATES,
+            candidates,
+            settle,
+        )
 
         starts = np.empty((MAX_CANDIDATES, 6))
-        count = candidates(*self._data, np.ascontiguousarray(T_dh), starts)
+        info = np.empty(1)
+        count = candidates(*self._data, np.ascontiguousarray(T_dh), starts, info)
         seeded = count
         if q_seed is not None:
             starts[count] = q_seed
             count += 1
         roots = np.empty((MAX_CANDIDATES, 6))
         errors = np.empty((MAX_CANDIDATES, 2))
+        sigmas = np.empty(MAX_CANDIDATES)
+        band = singular_band(tolerance)
         found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, count, seeded,
-                               tolerance, roots, errors)
-        return roots[:found], errors[:found], failed
+                               tolerance, lever, band, roots, errors, sigmas)
+        singular = sigmas[:found] <= band
+        if not info[0] >= LEAD_CONDITION:
+            singular[:] = True
+        return roots[:found], errors[:found], failed, singular
 
     def solve_one(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                   tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
@@ -330,8 +368,13 @@ class General6RSolver:
         chain, tool_inverse, lever = tip
         tip_target = self._base_inverse @ target
         T_dh = tip_target @ tool_inverse
-        roots, errors, failed = self._roots(T_dh, tip_target, chain, seed,
-                                            self.verification_tolerance(tolerance, lever))
+        verify = self.verification_tolerance(tolerance, lever)
+        if seed is None:  # as in the families: without a seed, free joints are chosen near 0
+            seed = np.zeros(6)
+        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, seed, verify,
+                                                        lever)
+        if np.any(singular):
+            self._seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
         if roots.shape[0] == 0:
             reason = ("no real solution: the elimination found no root that verifies on the "
                       f"exact chain at tolerance {tolerance:g}")
@@ -339,8 +382,8 @@ class General6RSolver:
                 reason += f" ({failed} candidate(s) did not converge)"
             return IKSolutions(q=np.zeros((0, 6)), family=self.family, reason=reason,
                                dropped=failed, projection=projection)
-        flags = self._flags(roots)
-        reference = np.zeros(6) if seed is None else seed
+        flags = [_SINGULAR if flag else _REGULAR for flag in singular]
+        reference = seed
         slack = tolerance / lever
         if copies:
             blocks = [(np.array(self._copies(q, reference, True, slack)).reshape(-1, 6),
@@ -366,9 +409,51 @@ class General6RSolver:
                            residuals=residuals, family=self.family, dropped=failed,
                            projection=projection)
 
-    def _flags(self, roots: NDArray[np.float64]) -> list[frozenset[str]]:
-        """The singularity flags of each root (none yet)."""
-        return [frozenset()] * roots.shape[0]
+    def _seed_members(self, roots: NDArray[np.float64], errors: NDArray[np.float64],
+                      singular: NDArray[np.bool_], seed: NDArray[np.float64],
+                      chain: NDArray[np.float64], tip_target: NDArray[np.float64],
+                      tolerance: float, lever: float) -> None:
+        """The seed's choice where a joint is free, in place: each singular root moves along
+        the solutions towards the seed, as the families' seeded candidate does (the member of
+        the solution family nearest the seed, docs/ik_core.md): steps along the Jacobian's
+        weak directions (singular values within :func:`singular_band`) by the seed's offset
+        projected onto them, at most MAX_JOINT_STEP per joint, each refined by Newton on the
+        exact chain and kept while it verifies and comes nearer the seed (at most
+        :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of solutions)
+        Newton returns to the root and nothing moves."""
+        from dhkin.ik.compiled.chain import MAX_JOINT_STEP, _jacobian, check, fk_frames, refine
+
+        target = np.ascontiguousarray(tip_target[:3])
+        band = singular_band(tolerance)
+        fixed = np.zeros(6, np.bool_)
+        state = np.empty(12)
+        frames = np.empty((7, 12))
+        J = np.empty((6, 6))
+        for index in np.flatnonzero(singular):
+            q = roots[index].copy()
+            distance = float(np.sum(_wrap(q - seed) ** 2))
+            for _ in range(SEED_STEPS):
+                fk_frames(chain, q, frames)
+                _jacobian(chain, frames, J)
+                J[:3] /= lever
+                _, sigma, Vt = np.linalg.svd(J)
+                weak = Vt[sigma <= band]
+                step = weak.T @ (weak @ _wrap(seed - q))
+                longest = float(np.max(np.abs(step)))
+                if longest <= 0.0:
+                    break
+                if longest > MAX_JOINT_STEP:
+                    step *= MAX_JOINT_STEP / longest
+                trial = np.ascontiguousarray(q + step)
+                refine(chain, target, trial, fixed, tolerance)
+                position, rotation = check(chain, trial, target, state)
+                trial_distance = float(np.sum(_wrap(trial - seed) ** 2))
+                if not (position <= tolerance and rotation <= tolerance
+                        and trial_distance < distance):
+                    break
+                q, distance = _wrap(trial), trial_distance
+                errors[index] = position, rotation
+            roots[index] = q
 
     def solve_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                     tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
@@ -485,6 +570,10 @@ class General6RSolver:
             residuals[row] = position, rotation
         return (clipped[keep], residuals[keep],
                 [f for f, k in zip(flags, keep, strict=True) if k])
+
+
+_REGULAR: frozenset[str] = frozenset()
+_SINGULAR: frozenset[str] = frozenset({"singular"})
 
 
 def _frames_at_zero(pre: NDArray[np.float64]) -> NDArray[np.float64]:

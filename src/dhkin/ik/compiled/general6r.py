@@ -18,7 +18,14 @@ from numba import types
 from numba.np.linalg import _LAPACK, ensure_lapack
 from numpy.typing import NDArray
 
-from dhkin.ik.compiled.chain import MAX_JOINT_STEP, SEED_DAMPING, check, refine
+from dhkin.ik.compiled.chain import (
+    MAX_JOINT_STEP,
+    SEED_DAMPING,
+    _jacobian,
+    check,
+    fk_frames,
+    refine,
+)
 from dhkin.ik.compiled.jit import jit
 
 ensure_lapack()
@@ -101,9 +108,13 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
                phi: NDArray[np.float64], D0_inverse: NDArray[np.float64],
                E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
                direction: NDArray[np.float64], offset: NDArray[np.float64],
-               T_dh: NDArray[np.float64], out: NDArray[np.float64]) -> int:
+               T_dh: NDArray[np.float64], out: NDArray[np.float64],
+               info: NDArray[np.float64]) -> int:
     """Joint values of every near-real eigenvalue for the target T_dh (4, 4), DH frame 0 ->
-    DH frame 6 of the exact chain, into out (MAX_CANDIDATES, 6); returns their number."""
+    DH frame 6 of the exact chain, into out (MAX_CANDIDATES, 6); returns their number.
+    info[0]: the reciprocal condition (1-norm) of the leading matrix used (below
+    LEAD_CONDITION: no angle gave a well-conditioned one, the pose's eigenproblem is
+    ill-conditioned)."""
     shift, k, reverse = setup[SHIFT], int(setup[K]), setup[REVERSED] != 0.0
     target = _rigid_inverse(T_dh) if reverse else T_dh
     H = D0_inverse @ target @ E_inverse
@@ -142,6 +153,7 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
             A[:, :], A_inverse[:, :] = M, inverse
         if ratio >= LEAD_CONDITION:
             break
+    info[0] = best
     # B and C of M(x) = A x^2 + B x + C with theta_k = lead + 2 atan(x)
     cs, sn = math.cos(lead), math.sin(lead)
     W = (Ps * cs - Pc * sn) @ half2
@@ -257,12 +269,40 @@ def _ratio_angle(m: NDArray[np.float64], axis: int) -> float:
 
 
 @jit
+def smallest_singular(chain: NDArray[np.float64], q: NDArray[np.float64], lever: float,
+                      band: float) -> float:
+    """The smallest singular value of the exact chain's Jacobian at q, its linear rows divided
+    by ``lever`` (m per rad of a point of the arm; rad and m/lever then weigh alike), where it
+    is at most ``band``; above it a lower bound may come back instead: |det J| / |J|_F^5 <=
+    sigma_min (the other five singular values are at most |J|_F), and the SVD (~20 times the
+    cost) runs only where that bound is at most ``band``."""
+    frames = np.empty((7, 12))
+    fk_frames(chain, q, frames)
+    J = np.empty((6, 6))
+    _jacobian(chain, frames, J)
+    size = 0.0
+    for r in range(6):
+        for c in range(6):
+            if r < 3:
+                J[r, c] /= lever
+            size += J[r, c] * J[r, c]
+    bound = abs(np.linalg.det(J)) / size ** 2.5 if size > 0.0 else 0.0
+    if bound > band:
+        return bound
+    return float(np.linalg.svd(J)[1][5])
+
+
+@jit
 def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArray[np.float64],
-           n_starts: int, seeded: int, tolerance: float, roots: NDArray[np.float64],
-           errors: NDArray[np.float64]) -> tuple[int, int]:
+           n_starts: int, seeded: int, tolerance: float, lever: float, band: float,
+           roots: NDArray[np.float64], errors: NDArray[np.float64],
+           sigmas: NDArray[np.float64]) -> tuple[int, int]:
     """Refine every start on the exact chain, keep those that verify, merge those that are
     one root (close, and their midpoint verifies); starts at index >= ``seeded`` (the seed)
-    start damped. Returns (roots found, candidates that did not verify)."""
+    start damped, and a seed's root that merges with a root found before replaces it when it
+    is nearer the seed (on a singular pose's curve of solutions, the seed's member). Returns
+    (roots found, candidates that did not verify); sigmas: :func:`smallest_singular` of each
+    root (``lever``, ``band``)."""
     target = np.ascontiguousarray(T_dh[:3])
     fixed = np.zeros(6, np.bool_)
     state = np.empty(12)
@@ -281,7 +321,7 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
             continue
         for j in range(6):
             q[j] = _wrap(q[j])
-        duplicate = False
+        duplicate = -1
         for other in range(found):
             largest = 0.0
             for j in range(6):
@@ -293,12 +333,23 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
                 middle[j] = roots[other, j] + 0.5 * middle[j]
             p2, r2 = check(chain, middle, target, state)
             if p2 <= tolerance and r2 <= tolerance:
-                duplicate = True
+                duplicate = other
                 break
-        if duplicate:
-            continue
+        slot = found
+        if duplicate >= 0:
+            if index < seeded:
+                continue
+            mine, theirs = 0.0, 0.0
+            for j in range(6):
+                mine += _wrap(q[j] - starts[index, j]) ** 2
+                theirs += _wrap(roots[duplicate, j] - starts[index, j]) ** 2
+            if mine >= theirs:
+                continue
+            slot = duplicate
         for j in range(6):
-            roots[found, j] = q[j]
-        errors[found, 0], errors[found, 1] = position, rotation
-        found += 1
+            roots[slot, j] = q[j]
+        errors[slot, 0], errors[slot, 1] = position, rotation
+        sigmas[slot] = smallest_singular(chain, q, lever, band)
+        if slot == found:
+            found += 1
     return found, failed

@@ -7,7 +7,9 @@ takes the target T (base_link -> tool0) and the robot under test (and, for the s
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+from collections.abc import Iterator
 from functools import cache
 from typing import TYPE_CHECKING
 
@@ -91,3 +93,87 @@ def branch_dropped_off_seed(T: NDArray[np.float64], robot: Robot,
         return solutions.q
     keep = [k for k, c in enumerate(solutions.configurations) if dict(c.labels) != first]
     return solutions.q[keep]
+
+
+# ---------------------------------------------------------------------------------------------
+# Hostile IKs (issue 15): each misbehaves in a way the validator must report as a failure of the
+# pose, never as its own crash, exit, hang or a PASS.
+
+
+def garbage_row(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
+    """Every correct solution, plus one row of garbage (caught as "wrong" by any tolerance)."""
+    q = robot.ik(T).q
+    return np.vstack([q, np.full((1, robot.dof), 0.123)])
+
+
+def writes_its_answer_into_the_seed(T: NDArray[np.float64], robot: Robot,
+                                    q_seed: NDArray[np.float64] | None = None
+                                    ) -> NDArray[np.float64]:
+    """Returns only the first solution, after writing it into ``q_seed`` (a validator that
+    handed over its own sample would then find the sample among the answers)."""
+    first = robot.ik(T).q[:1]
+    if q_seed is not None and len(first):
+        with contextlib.suppress(ValueError):  # a read-only copy: carry on regardless
+            q_seed[:] = first[0]
+    return first
+
+
+def shifts_the_target(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
+    """Moves the target 10 cm along x in place, then solves the moved target."""
+    T[0, 3] += 0.1
+    return robot.ik(T).q
+
+
+def exits(T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Calls sys.exit(0) (a script's IK that ends the process)."""
+    import sys
+
+    sys.exit(0)
+
+
+def endless(T: NDArray[np.float64], robot: Robot) -> Iterator[NDArray[np.float64]]:
+    """A generator that yields the first solution for ever."""
+    first = robot.ik(T).q[0]
+    while True:
+        yield first
+
+
+def sleeps(T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Never answers in time (sleeps a minute)."""
+    import time
+
+    time.sleep(60)
+    return np.zeros((0, 6))
+
+
+def crashes(T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Crashes the process as a broken C extension does (a segmentation fault)."""
+    import ctypes
+
+    ctypes.string_at(0)
+    return np.zeros((0, 6))
+
+
+def raises(T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Raises a plain exception."""
+    raise ZeroDivisionError("the solver divided by zero\nsecond line of the message")
+
+
+def returns_none(T: NDArray[np.float64]) -> None:
+    """Returns None."""
+    return None
+
+
+def returns_a_scalar(T: NDArray[np.float64]) -> float:
+    """Returns one number."""
+    return 0.5
+
+
+def returns_strings(T: NDArray[np.float64], robot: Robot) -> list[list[str]]:
+    """Returns the solutions as strings."""
+    return [[f"{v:.17g}" for v in row] for row in robot.ik(T).q]
+
+
+def returns_the_wrong_shape(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
+    """Returns the solutions transposed, (6, k)."""
+    return robot.ik(T).q.T

@@ -23,7 +23,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("kinematics", ("dhkin.ik", "dhkin.ik.*", "dhkin.arm", "dhkin.opw",
                     "dhkin.opw_yaml")),
     ("analysis", ("dhkin.singularity", "dhkin.singularity.*", "dhkin.maps", "dhkin.maps.*",
-                  "dhkin.validate", "dhkin.validate.*", "dhkin.compare",
+                  "dhkin.validation", "dhkin.validation.*", "dhkin.compare",
                   "dhkin.importer")),
     ("facade", ("dhkin.robot",)),
     ("application", ("dhkin", "dhkin.checks", "dhkin.cli")),

@@ -21,7 +21,7 @@ import dhkin
 from dhkin.errors import InputError
 from dhkin.reference import Reference
 from dhkin.transforms import invert, pose_error
-from dhkin.validate import (
+from dhkin.validation import (
     CONTINUITY_DISTANCE,
     CONTINUITY_SETS,
     OUTCOMES,
@@ -466,7 +466,7 @@ def test_seedless_ik_at_the_wrist_singularity(abb: dhkin.Robot) -> None:
 def test_joint_tolerance_follows_the_conditioning(abb: dhkin.Robot) -> None:
     """Away from singularities the missing check uses joint_tolerance; at |q5| = 1e-10 the pose
     resolves q only to ~1e-14 / sigma_min, and the check allows that much, no more."""
-    from dhkin.validate import POSE_ROUNDING, _resolvable
+    from dhkin.validation import POSE_ROUNDING, _resolvable
 
     generic = np.array([0.3, 0.2, -0.4, 0.5, 0.9, -0.2])
     assert _resolvable(abb, generic, 1e-6) == pytest.approx(1e-6, rel=1e-6)

@@ -5,7 +5,7 @@ Pinocchio and yourdfpy; own FK equals Pinocchio FK; the vendor URDF agrees where
 ("vendor": poses within 1e-9, and position and velocity limits equal within
 dhkin.compare.LIMIT_TOLERANCE, since the built-in tables take them from the vendor files; joint
 name and type differences, such as a vendor's continuous joint where the table has +-360 deg, are
-listed in the cell without failing it); the IK is cross-validated (dhkin.validate) twice:
+listed in the cell without failing it); the IK is cross-validated (dhkin.validation) twice:
 
 * "ik vs pin": targets made and solutions checked by Pinocchio on the exact generated URDF
   (``reference="exact"``): closed-form IK on ``ik_poses`` uniform poses plus the special-angle and
@@ -40,7 +40,7 @@ from dhkin.validators import load_in_pinocchio, load_in_yourdfpy, run_check_urdf
 from dhkin.vendors import VENDOR_REFERENCES
 
 if TYPE_CHECKING:
-    from dhkin.validate import ValidationReport
+    from dhkin.validation import ValidationReport
 
 FK_SAMPLES = 1000
 FK_TOLERANCE = 1e-12
@@ -136,7 +136,7 @@ def _ik_text(report: ValidationReport) -> str:
 
 def check_ik(robot: Robot, poses: int, seed: int) -> CheckCell:
     """Cross-validate the robot's own IK on the exact generated URDF (see the module docstring)."""
-    from dhkin.validate import validate
+    from dhkin.validation import validate
 
     n = poses if robot.has_closed_form else min(poses, NUMERICAL_POSES)
     report = validate(robot, n=n, seed=seed, progress=sys.stderr.isatty(), reference="exact")
@@ -148,7 +148,7 @@ def check_ik_vendor(robot: Robot, reference_dir: Path | None, poses: int,
                     seed: int) -> CheckCell | None:
     """Cross-validate the robot's own IK with targets made and solutions checked on its vendor
     URDF (frames from VENDOR_REFERENCES), or None when the robot has no vendor reference."""
-    from dhkin.validate import validate
+    from dhkin.validation import validate
 
     if robot.name not in VENDOR_REFERENCES:
         return None

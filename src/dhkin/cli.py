@@ -197,7 +197,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from dhkin.validate import (
+    from dhkin.validation import (
         adapt,
         load_ik,
         own_ik,
@@ -206,24 +206,29 @@ def cmd_validate(args: argparse.Namespace) -> int:
         validate,
         write_failures,
     )
+    from dhkin.validation.arguments import check_command_line
 
+    check_command_line(args)
     robot = load(args.robot)
+    ik, name = None, args.ik  # None: the robot's own IK, closed form or numerical, as the API
     if args.ik is None:
         family = robot.ik_solver.family if robot.has_closed_form else "numerical"
-        ik, name = own_ik(robot), f"dhkin's own IK ({family})"
+        name = f"dhkin's own IK ({family})"
     else:
-        ik, name = load_ik(args.ik), args.ik
+        ik = load_ik(args.ik)
         if args.deg or args.ik_frame:
             tool = tool_frame_from_robot(robot, args.ik_frame) if args.ik_frame else None
             ik = adapt(ik, degrees=args.deg, tool=tool)
     if args.replay:
         # The failure file names its reference; --reference/--base/--tip override it.
-        report = replay(robot, ik, args.replay, ik_name=name, reference=args.reference,
-                        base=args.base, tip=args.tip)
+        report = replay(robot, own_ik(robot) if ik is None else ik, args.replay, ik_name=name,
+                        reference=args.reference, base=args.base, tip=args.tip,
+                        timeout=args.timeout, isolate=args.isolate)
     else:
         report = validate(robot, ik, n=args.n, seed=args.seed, tolerance=args.tolerance,
-                          progress=sys.stderr.isatty(), ik_name=name, reference=args.reference,
-                          base=args.base, tip=args.tip)
+                          joint_tolerance=args.joint_tolerance, progress=sys.stderr.isatty(),
+                          ik_name=name, reference=args.reference, base=args.base,
+                          tip=args.tip, timeout=args.timeout, isolate=args.isolate)
     print(report.summary())
     if args.json:
         Path(args.json).write_text(json.dumps(report.to_json(), indent=1), encoding="utf-8")
@@ -409,6 +414,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(run=cmd_ik)
 
+    from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT
+    from dhkin.validation.run import DEFAULT_JOINT_TOLERANCE
+
     p = sub.add_parser("validate", help="cross-validate an IK against Pinocchio on a reference "
                                         "description (rounded, exact or a vendor URDF)")
     _robot_arg(p)
@@ -418,8 +426,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
-    p.add_argument("--deg", action="store_true", help="the IK returns degrees")
-    p.add_argument("--ik-frame", help="the IK solves for this frame of our URDF, not tool0")
+    p.add_argument("--joint-tolerance", type=float, default=DEFAULT_JOINT_TOLERANCE,
+                   help=f"rad / m: same joint vector (default {DEFAULT_JOINT_TOLERANCE:g})")
+    p.add_argument("--deg", action="store_true", help="the --ik IK works in degrees")
+    p.add_argument("--ik-frame", help="the --ik IK solves for this frame of our URDF, not tool0")
+    p.add_argument("--timeout", type=float, default=DEFAULT_CALL_TIMEOUT, help="seconds per IK "
+                   f"call, else a failure of its pose (default {DEFAULT_CALL_TIMEOUT:g})")
+    p.add_argument("--isolate", action="store_true", help="call the IK in a child process: a "
+                   "crash or a hang it swallows fails its pose, not the run")
     p.add_argument("--json", help="write the report as JSON to this file")
     p.add_argument("--report", help="write the report as Markdown to this file")
     p.add_argument("--failures", help="failure file (default <robot>_ik_failures.json)")

@@ -1,16 +1,30 @@
 """Cross-validation of any IK callable against an oracle: Pinocchio on a reference description
-(:mod:`.run` documents what is checked). Every public name is importable from ``dhkin.validate``.
+(:mod:`.run` documents what is checked; :mod:`.calls` how the IK under test is called, guarded;
+:mod:`.arguments` the limits of the arguments). Every public name is importable from
+``dhkin.validation``; :func:`validate` is also ``dhkin.validate``.
 """
 
 from __future__ import annotations
 
-from dhkin.validate.adapters import (
+from dhkin.validation.adapters import (
     IKCallable,
     adapt,
     load_ik,
     own_ik,
 )
-from dhkin.validate.references import (
+from dhkin.validation.arguments import (
+    MAX_JOINT_TOLERANCE,
+    MAX_SAMPLES,
+    MAX_TOLERANCE,
+)
+from dhkin.validation.calls import (
+    DEFAULT_CALL_TIMEOUT,
+    MAX_SOLUTIONS_PER_CALL,
+    CallResult,
+    IKCaller,
+)
+from dhkin.validation.failure_file import FailureFile, read_failure_file
+from dhkin.validation.references import (
     REFERENCE_KINDS,
     ROUNDED_DIGITS,
     ReferenceSpec,
@@ -20,7 +34,7 @@ from dhkin.validate.references import (
     target_model,
     tool_frame_from_robot,
 )
-from dhkin.validate.report import (
+from dhkin.validation.report import (
     COMPLETENESS_OUTCOMES,
     OUTCOMES,
     SAMPLE_SETS,
@@ -28,15 +42,16 @@ from dhkin.validate.report import (
     ValidationReport,
     write_failures,
 )
-from dhkin.validate.run import (
+from dhkin.validation.rerun import replay
+from dhkin.validation.run import (
+    DEFAULT_JOINT_TOLERANCE,
     POSE_ROUNDING,
     SINGULAR_FAMILY_FIXED_JOINTS,
     WRIST_SINGULAR,
     _resolvable,
-    replay,
     validate,
 )
-from dhkin.validate.samples import (
+from dhkin.validation.samples import (
     CONTINUITY_DISTANCE,
     CONTINUITY_SETS,
     NEAR_SINGULAR_MAX,
@@ -51,6 +66,12 @@ __all__ = [
     "COMPLETENESS_OUTCOMES",
     "CONTINUITY_DISTANCE",
     "CONTINUITY_SETS",
+    "DEFAULT_CALL_TIMEOUT",
+    "DEFAULT_JOINT_TOLERANCE",
+    "MAX_JOINT_TOLERANCE",
+    "MAX_SAMPLES",
+    "MAX_SOLUTIONS_PER_CALL",
+    "MAX_TOLERANCE",
     "NEAR_SINGULAR_MAX",
     "OUTCOMES",
     "POSE_ROUNDING",
@@ -62,7 +83,10 @@ __all__ = [
     "SPECIAL_ANGLES",
     "WRIST_JOINT",
     "WRIST_SINGULAR",
+    "CallResult",
+    "FailureFile",
     "IKCallable",
+    "IKCaller",
     "ReferenceSpec",
     "SampleResult",
     "TargetModel",
@@ -72,6 +96,7 @@ __all__ = [
     "load_ik",
     "own_ik",
     "perturbed_seeds",
+    "read_failure_file",
     "replay",
     "resolve_reference",
     "rounded_urdf",

@@ -9,8 +9,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from dhkin.validate.references import ReferenceSpec
-from dhkin.validate.samples import CONTINUITY_DISTANCE, SEED_PERTURBATION
+from dhkin.validation.references import ReferenceSpec
+from dhkin.validation.samples import CONTINUITY_DISTANCE, SEED_PERTURBATION
 
 SAMPLE_SETS: tuple[str, ...] = ("uniform", "special", "near_singular")
 

@@ -18,6 +18,7 @@ from dhkin.arm import Arm
 from dhkin.errors import InputError, URDFError
 from dhkin.reference import Reference
 from dhkin.transforms import invert
+from dhkin.validation.arguments import quoted
 from dhkin.vendors import VENDOR_REFERENCES
 
 #: Significant digits of the default "rounded" reference (see :func:`rounded_urdf`).
@@ -89,14 +90,33 @@ class ReferenceSpec:
 
     @classmethod
     def from_json(cls, data: Any, source: str = "reference") -> ReferenceSpec:
-        """From :meth:`to_json`'s dict, or one of the names "rounded" / "exact"."""
+        """From :meth:`to_json`'s dict, or one of the names "rounded" / "exact"; every value is
+        checked (InputError naming ``source`` and the key)."""
         if isinstance(data, str) and data in REFERENCE_KINDS:
             return cls(kind=data)
+        expected = "'rounded', 'exact' or a vendor reference {kind, path, base, tip}"
         if not isinstance(data, Mapping) or data.get("kind") not in (*REFERENCE_KINDS, "vendor"):
-            raise InputError(f"{source}: expected 'rounded', 'exact' or a vendor "
-                             f"reference {{kind, path, base, tip}}, got {data!r}", field=source)
-        known = {k: data[k] for k in ("kind", "path", "base", "tip", "robot_tip", "digits")
-                 if k in data}
+            shown = quoted(data)
+            raise InputError(f"{source}: expected {expected}, got {shown}", field=source,
+                             value=shown, expected=expected)
+        known: dict[str, Any] = {}
+        for key in ("kind", "path", "base", "tip", "robot_tip"):
+            if key in data:
+                if not isinstance(data[key], str):
+                    raise InputError(f"{source}.{key}: expected a string, got "
+                                     f"{quoted(data[key])}", field=f"{source}.{key}",
+                                     value=quoted(data[key]), expected="a string")
+                known[key] = data[key]
+        if "digits" in data:
+            digits = data["digits"]
+            if isinstance(digits, bool) or not isinstance(digits, int) or not 1 <= digits <= 17:
+                raise InputError(f"{source}.digits: expected an integer in [1, 17], got "
+                                 f"{quoted(digits)}", field=f"{source}.digits",
+                                 value=quoted(digits), expected="an integer in [1, 17]")
+            known["digits"] = digits
+        if known["kind"] == "vendor" and not known.get("path"):
+            raise InputError(f"{source}.path: expected the vendor URDF's path, got none",
+                             field=f"{source}.path", expected="a path")
         return cls(**known)
 
 

@@ -6,7 +6,8 @@ optional keyword parameters are honoured when the callable declares them: ``q_se
 joint vector is passed, so that a solver can pick free joints at a singularity from it) and
 ``robot`` (the robot under test: a :class:`dhkin.robot.Robot`, or any
 :class:`~dhkin.arm.Arm`). :func:`adapt` wraps an IK that works in degrees or for another tool
-frame.
+frame. Each call is guarded (:mod:`dhkin.validation.calls`): the IK gets read-only copies, and
+whatever it raises or returns, however long it runs, is a result of that pose.
 
 Samples (fixed seed): ``uniform`` joint vectors within the limits; ``special`` vectors whose
 joints take the special angles 0, +-pi/2, pi (those inside the limits); ``near_singular``
@@ -61,11 +62,10 @@ Outcome per sample (one each, the first that applies, in this order):
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from collections import Counter
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -77,12 +77,13 @@ from dhkin.arm import Arm
 from dhkin.errors import DhkinError, FamilyError, InputError
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
-from dhkin.validate.adapters import IKCallable, _call, _takes_seed, own_ik
-from dhkin.validate.references import ReferenceSpec, TargetModel, target_model
-from dhkin.validate.report import OUTCOMES, SampleResult, ValidationReport
-from dhkin.validate.samples import (
+from dhkin.validation import arguments
+from dhkin.validation.adapters import IKCallable, own_ik
+from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, CallResult, IKCaller, takes_seed
+from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
+from dhkin.validation.report import OUTCOMES, SampleResult, ValidationReport
+from dhkin.validation.samples import (
     CONTINUITY_DISTANCE,
-    CONTINUITY_SETS,
     SEED_PERTURBATION,
     WRIST_JOINT,
     perturbed_seeds,
@@ -199,9 +200,13 @@ def _verify(robot: Arm, model: TargetModel, T: NDArray[np.float64],
 
 
 def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64],
-                  T: NDArray[np.float64], returned: list[NDArray[np.float64]], tolerance: float,
+                  T: NDArray[np.float64], call: CallResult, tolerance: float,
                   joint_tolerance: float, seeded: bool) -> tuple[_Checked, NDArray[np.float64]]:
     """wrong / no_solution / missing / success of the first call, and its finite solutions."""
+    returned = call.solutions
+    if call.problem:  # it raised, exited, timed out, or returned no list of joint vectors
+        empty = np.zeros(0)
+        return _Checked(call.outcome, call.problem, empty, empty), np.zeros((0, robot.dof))
     Q, position, rotation, problem = _verify(robot, model, T, returned, tolerance)
     if problem:
         return _Checked("wrong", problem, position, rotation), Q
@@ -266,12 +271,47 @@ def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> It
     return tqdm(iterable, total=total, desc=label, unit="pose", leave=False, file=sys.stderr)
 
 
+#: Returned solutions a failure record keeps (per call): every 2pi copy of the 16 branches of
+#: a UR-type arm with +-360 deg joints (16 * 2^6), while an IK returning up to
+#: MAX_SOLUTIONS_PER_CALL rows on every pose cannot make the report hold gigabytes.
+FAILURE_SOLUTIONS_KEPT = 1024
+
+
+#: Default ``joint_tolerance`` (rad, m for prismatic joints) of the missing checks.
+DEFAULT_JOINT_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """The checked arguments of one run (of :func:`validate` or :func:`~.rerun.replay`)."""
+
+    seed: int
+    tolerance: float
+    joint_tolerance: float
+    timeout: float | None
+    isolate: bool
+    progress: bool
+    ik_name: str
+    complete_expected: bool
+
+
+def ik_name_of(ik: Any, given: str | None) -> str:
+    if given is not None:
+        return given
+    try:
+        return arguments.one_line(str(getattr(ik, "__name__", "ik")), 120)
+    except Exception:  # a hostile __getattr__ / __str__: the IK gets a plain name
+        return "ik"
+
+
 def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: int = 0,
-             tolerance: float = DEFAULT_TOLERANCE, joint_tolerance: float = 1e-6,
+             tolerance: float = DEFAULT_TOLERANCE,
+             joint_tolerance: float = DEFAULT_JOINT_TOLERANCE,
              progress: bool = False, ik_name: str | None = None,
              complete_expected: bool | None = None,
              reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
-             tip: str | None = None) -> ValidationReport:
+             tip: str | None = None, timeout: float | None = DEFAULT_CALL_TIMEOUT,
+             isolate: bool = False) -> ValidationReport:
     """Validate ``ik`` (default: dhkin's own) on ``robot``; see the module docstring.
 
     ``complete_expected`` (default: True, except for dhkin's own numerical IK, which returns
@@ -279,51 +319,75 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
     ``reference`` makes the targets and checks the solutions: "rounded" (default), "exact", or
     the path of a vendor URDF whose frames ``base`` -> ``tip`` are the table's base_link ->
     tool0 (defaults: :data:`~dhkin.vendors.VENDOR_REFERENCES`, else base_link / tool0).
+    ``timeout`` (s, None: no limit) bounds each IK call and ``isolate`` runs the calls in a
+    child process (:mod:`dhkin.validation.calls`). Every argument is checked first
+    (:mod:`dhkin.validation.arguments`): a wrong one is an InputError naming it.
     """
-    if n < 1:
-        raise InputError(f"n: expected at least 1 sample, got {n}", field="n")
+    if ik is not None and not callable(ik):
+        raise InputError(f"ik: expected a callable ik(T) -> joint vectors (or None for "
+                         f"dhkin's own), got {arguments.quoted(ik)}", field="ik",
+                         value=arguments.quoted(ik), expected="a callable or None")
+    n = arguments.sample_count(n)
+    settings = RunSettings(
+        seed=arguments.seed_value(seed), tolerance=arguments.tolerance_value(tolerance),
+        joint_tolerance=arguments.joint_tolerance_value(joint_tolerance),
+        timeout=arguments.timeout_value(timeout),
+        isolate=bool(arguments.flag(isolate, "isolate")),
+        progress=bool(arguments.flag(progress, "progress")),
+        ik_name=ik_name_of(ik if ik is not None else own_ik(robot),
+                         arguments.optional_text(ik_name, "ik_name")),
+        complete_expected=(ik is not None or robot.has_closed_form
+                           if arguments.flag(complete_expected, "complete_expected",
+                                             optional=True) is None
+                           else bool(complete_expected)))
     model = target_model(robot, reference, base, tip)
     callable_ik = own_ik(robot) if ik is None else ik
-    if complete_expected is None:
-        complete_expected = ik is not None or robot.has_closed_form
-    q, sets = sample_joint_vectors(robot, n, seed)
-    return _run(robot, model, callable_ik, q, sets, perturbed_seeds(robot, q, sets, seed), seed,
-                tolerance, joint_tolerance, progress,
-                ik_name or str(getattr(callable_ik, "__name__", "ik")), complete_expected)
+    q, sets = sample_joint_vectors(robot, n, settings.seed)
+    return run_samples(robot, model, callable_ik, q, sets,
+                perturbed_seeds(robot, q, sets, settings.seed), settings)
 
 
-def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
-         sets: list[str], perturbed: NDArray[np.float64], seed: int, tolerance: float,
-         joint_tolerance: float, progress: bool, ik_name: str,
-         complete_expected: bool = True) -> ValidationReport:
+def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
+         sets: list[str], perturbed: NDArray[np.float64],
+         settings: RunSettings) -> ValidationReport:
     started = time.perf_counter()
     targets = model.fk(q)
     labels = _configuration_labels(robot, targets, q)
-    report = ValidationReport(robot=robot.name, ik_name=ik_name, tolerance=tolerance,
-                              joint_tolerance=joint_tolerance, seed=seed,
-                              complete_expected=complete_expected,
+    report = ValidationReport(robot=robot.name, ik_name=settings.ik_name,
+                              tolerance=settings.tolerance,
+                              joint_tolerance=settings.joint_tolerance, seed=settings.seed,
+                              complete_expected=settings.complete_expected,
                               reference=model.spec.to_json(), samples=len(sets))
     if model.spec.kind != "exact":
         position, rotation = pose_error(targets, robot.reference().fk(q))
         report.reference_deviation = {"position_max": float(position.max()),
                                       "rotation_max": float(rotation.max())}
         model.deviation = max(report.reference_deviation.values())
+    with IKCaller(ik, robot, settings.timeout, settings.isolate) as caller:
+        _check_all(robot, model, caller, q, sets, perturbed, targets, labels, settings, report)
+    report.seconds = time.perf_counter() - started
+    return report
+
+
+def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.float64],
+               sets: list[str], perturbed: NDArray[np.float64], targets: NDArray[np.float64],
+               labels: list[str], settings: RunSettings, report: ValidationReport) -> None:
+    """Call and check every sample; fill the report's counts, residuals and failures. The IK
+    gets read-only copies (see :class:`IKCaller`): ``q``, ``targets`` and ``perturbed`` stay
+    the validator's own, for the checks and the failure file."""
+    tolerance, joint_tolerance = settings.tolerance, settings.joint_tolerance
     counts: Counter[str] = Counter()
     by_set: dict[str, Counter[str]] = {}
     by_configuration: dict[str, Counter[str]] = {}
     all_position, all_rotation, n_solutions = [], [], []
-    seeded = _takes_seed(ik)
-    check_branches = complete_expected and robot.has_closed_form
-    for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", progress):
-        try:
-            returned = _call(ik, robot, targets[k], q[k])
-        except DhkinError as exc:
-            returned, error = [], f"raised {type(exc).__name__}: {exc}"
-        else:
-            error = ""
-        checked, Q = _check_sample(robot, model, q[k], targets[k], returned, tolerance,
+    seeded = takes_seed(caller.ik)
+    check_branches = settings.complete_expected and robot.has_closed_form
+    for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", settings.progress):
+        call = caller(targets[k], q[k])
+        returned = call.solutions
+        checked, Q = _check_sample(robot, model, q[k], targets[k], call, tolerance,
                                    joint_tolerance, seeded)
-        outcome, detail = checked.outcome, error or checked.detail
+        outcome, detail = checked.outcome, checked.detail
         all_position.append(checked.position)
         all_rotation.append(checked.rotation)
         missing: list[str] = []
@@ -341,7 +405,7 @@ def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
         if outcome == "success" and seeded and np.all(np.isfinite(perturbed[k])):
             report.continuity_checked += 1
             outcome, detail, returned_perturbed = _check_continuity(
-                robot, model, ik, targets[k], perturbed[k], tolerance, all_position,
+                robot, model, caller, targets[k], perturbed[k], tolerance, all_position,
                 all_rotation)
         counts[outcome] += 1
         by_set.setdefault(sets[k], Counter())[outcome] += 1
@@ -349,15 +413,19 @@ def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
             by_configuration.setdefault(labels[k], Counter())[outcome] += 1
         n_solutions.append(len(returned))
         if outcome != "success":
+            if max(len(returned), len(returned_perturbed)) > FAILURE_SOLUTIONS_KEPT:
+                detail += (f" (the failure keeps the first {FAILURE_SOLUTIONS_KEPT} of "
+                           f"{max(len(returned), len(returned_perturbed))} solutions)")
             report.failures.append(SampleResult(
                 index=k, sample_set=sets[k], q_sampled=q[k].tolist(), target=targets[k].tolist(),
-                returned=[r.tolist() for r in returned],
+                returned=[r.tolist() for r in returned[:FAILURE_SOLUTIONS_KEPT]],
                 position_errors=checked.position.tolist(),
                 rotation_errors=checked.rotation.tolist(), outcome=outcome, detail=detail,
                 configuration=labels[k],
                 perturbed_seed=(perturbed[k].tolist() if np.all(np.isfinite(perturbed[k]))
                                 else []),
-                returned_perturbed=[r.tolist() for r in returned_perturbed],
+                returned_perturbed=[r.tolist()
+                                    for r in returned_perturbed[:FAILURE_SOLUTIONS_KEPT]],
                 missing_branches=missing))
     report.counts = {o: counts.get(o, 0) for o in OUTCOMES}
     report.by_set = {s: dict(c) for s, c in by_set.items()}
@@ -370,21 +438,19 @@ def _run(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
             "position_max": float(position.max()), "position_median": float(np.median(position)),
             "rotation_max": float(rotation.max()), "rotation_median": float(np.median(rotation)),
         }
-    report.seconds = time.perf_counter() - started
-    return report
 
 
-def _check_continuity(robot: Arm, model: TargetModel, ik: IKCallable, T: NDArray[np.float64],
+def _check_continuity(robot: Arm, model: TargetModel, caller: IKCaller, T: NDArray[np.float64],
                       seed: NDArray[np.float64], tolerance: float,
                       all_position: list[NDArray[np.float64]],
                       all_rotation: list[NDArray[np.float64]]
                       ) -> tuple[str, str, list[NDArray[np.float64]]]:
     """Second call with the perturbed seed: (outcome, detail, what came back)."""
-    try:
-        returned = _call(ik, robot, T, seed)
-    except DhkinError as exc:
-        return ("discontinuous", f"with the perturbed seed: raised {type(exc).__name__}: {exc}",
-                [])
+    call = caller(T, seed)
+    returned = call.solutions
+    if call.problem:
+        outcome = "wrong" if call.outcome == "wrong" else "discontinuous"
+        return outcome, f"with the perturbed seed: {call.problem}", returned
     Q, position, rotation, problem = _verify(robot, model, T, returned, tolerance)
     all_position.append(position)
     all_rotation.append(rotation)
@@ -398,40 +464,3 @@ def _check_continuity(robot: Arm, model: TargetModel, ik: IKCallable, T: NDArray
                 f"nearest solution is {distance:.3f} from it on joint {joint + 1} (allowed "
                 f"{CONTINUITY_DISTANCE})", returned)
     return "success", "", returned
-
-
-def replay(robot: Arm, ik: IKCallable, path: str | Path, ik_name: str | None = None,
-           reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
-           tip: str | None = None, complete_expected: bool | None = None) -> ValidationReport:
-    """Rerun the samples of a failure file with ``ik`` and check them again, on the reference
-    the file records (files without one: "exact") unless ``reference`` / ``base`` / ``tip``
-    say otherwise, with the recorded perturbed seeds."""
-    file = Path(path)
-    try:
-        data: Mapping[str, Any] = json.loads(file.read_text(encoding="utf-8"))
-        failures = data["failures"]
-        q = np.array([f["q_sampled"] for f in failures], dtype=float).reshape(-1, robot.dof)
-        sets = [str(f["sample_set"]) for f in failures]
-        tolerance = float(data["tolerance"])
-        joint_tolerance = float(data["joint_tolerance"])
-        recorded = [np.asarray(f.get("perturbed_seed") or [], dtype=float) for f in failures]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise InputError(f"{file}: not a dhkin failure file ({exc}); expected the JSON "
-                         "written by `dhkin validate --failures`") from exc
-    if data.get("robot") != robot.name:
-        raise InputError(f"{file}: failures of robot {data.get('robot')!r}, "
-                         f"expected {robot.name!r}")
-    if not failures:
-        raise InputError(f"{file}: no failures to replay")
-    if reference is None:
-        reference = ReferenceSpec.from_json(data.get("reference", "exact"), f"{file}: reference")
-    model = target_model(robot, reference, base, tip)
-    seed = int(data.get("seed", 0))
-    perturbed = perturbed_seeds(robot, q, sets, seed)
-    for k, row in enumerate(recorded):
-        if row.shape == (robot.dof,) and sets[k] in CONTINUITY_SETS:
-            perturbed[k] = row
-    if complete_expected is None:
-        complete_expected = bool(data.get("complete_expected", True))
-    return _run(robot, model, ik, q, sets, perturbed, seed, tolerance, joint_tolerance, False,
-                ik_name or str(getattr(ik, "__name__", "ik")), complete_expected)

@@ -212,7 +212,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     robot = load(args.robot)
     ik, name = None, args.ik  # None: the robot's own IK, closed form or numerical, as the API
     if args.ik is None:
-        family = robot.ik_solver.family if robot.has_closed_form else "numerical"
+        family = robot.ik_family
         name = f"dhkin's own IK ({family})"
     else:
         ik = load_ik(args.ik)

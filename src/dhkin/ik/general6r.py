@@ -341,10 +341,11 @@ class General6RSolver:
         errors = np.empty((MAX_CANDIDATES, 2))
         sigmas = np.empty(MAX_CANDIDATES)
         band = singular_band(tolerance)
+        ill_conditioned = not info[0] >= LEAD_CONDITION
         found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, count, seeded,
-                               tolerance, lever, band, roots, errors, sigmas)
+                               tolerance, lever, band, ill_conditioned, roots, errors, sigmas)
         singular = sigmas[:found] <= band
-        if not info[0] >= LEAD_CONDITION:
+        if ill_conditioned:
             singular[:] = True
         return roots[:found], errors[:found], failed, singular
 

@@ -295,14 +295,16 @@ def smallest_singular(chain: NDArray[np.float64], q: NDArray[np.float64], lever:
 @jit
 def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArray[np.float64],
            n_starts: int, seeded: int, tolerance: float, lever: float, band: float,
-           roots: NDArray[np.float64], errors: NDArray[np.float64],
+           ill_conditioned: bool, roots: NDArray[np.float64], errors: NDArray[np.float64],
            sigmas: NDArray[np.float64]) -> tuple[int, int]:
     """Refine every start on the exact chain, keep those that verify, merge those that are
-    one root (close, and their midpoint verifies); starts at index >= ``seeded`` (the seed)
-    start damped, and a seed's root that merges with a root found before replaces it when it
-    is nearer the seed (on a singular pose's curve of solutions, the seed's member). Returns
-    (roots found, candidates that did not verify); sigmas: :func:`smallest_singular` of each
-    root (``lever``, ``band``)."""
+    one root (close, and their midpoint verifies). Starts at index >= ``seeded`` (the seed)
+    are used only on a singular pose: when no candidate verified, a root is singular
+    (sigma <= ``band``) or the eigenproblem is ``ill_conditioned``; a regular pose's roots come
+    from the elimination alone. A seed starts damped, and its root, when it merges with a
+    root found before, replaces it if nearer the seed (on a curve of solutions, the seed's
+    member). Returns (roots found, candidates that did not verify); sigmas:
+    :func:`smallest_singular` of each root (``lever``, ``band``)."""
     target = np.ascontiguousarray(T_dh[:3])
     fixed = np.zeros(6, np.bool_)
     state = np.empty(12)
@@ -310,6 +312,12 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
     middle = np.empty(6)
     found, failed = 0, 0
     for index in range(n_starts):
+        if index == seeded and found > 0 and not ill_conditioned:
+            singular = False
+            for other in range(found):
+                singular = singular or sigmas[other] <= band
+            if not singular:
+                break
         for j in range(6):
             q[j] = starts[index, j]
         damping = SEED_DAMPING if index >= seeded else 0.0

@@ -539,7 +539,7 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
     n = min(len(poses.T), 2000)
     targets = [np.ascontiguousarray(solver._base_inverse @ T) for T in poses.T[:n]]
     T_dh = [np.ascontiguousarray(T @ solver._tool_inverse) for T in targets]
-    starts, info = np.empty((MAX_CANDIDATES, 6)), np.empty(1)
+    starts, info = np.empty((MAX_CANDIDATES, 6)), np.empty(2)
     roots, errors, sigmas = (np.empty((MAX_CANDIDATES, 6)), np.empty((MAX_CANDIDATES, 2)),
                              np.empty(MAX_CANDIDATES))
     counts = [candidates(*solver._data, T, starts, info) for T in T_dh]
@@ -559,7 +559,7 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
     def both(k: int) -> None:
         count = candidates(*solver._data, T_dh[k], starts, info)
         settle(solver.tip_chain, targets[k], starts, count, count, EXACT, solver.lever, band,
-               False, roots, errors, sigmas)
+               False, int(info[1]), roots, errors, sigmas)
 
     eliminate = median_of(lambda k: candidates(*solver._data, T_dh[k], starts, info))
     kernels = median_of(both)

@@ -4,11 +4,14 @@
     python scripts/check_general6r.py --poses 10000 --special 1000 --tables 100 --table-poses 1000
 
 Per arm (CRX-10iA, xArm6, UR5 with joint 2's alpha tilted 10 deg): random poses within the
-limits, targets by Pinocchio on the generated URDF, seeded with the sampled q: the share of
-poses whose q came back (mod 2pi, 1e-6 rad), the worst oracle error of any returned solution,
-the median time per single call; special angles (joints in {0, +-pi/2, pi}): wrong solutions and
-exceptions. Random tables (fixed seed): the same, plus solution counts (before limits) even and
-at most 16. UR5 and IRB 1200: the same solution set as the family solvers (mod 2pi).
+limits, targets by Pinocchio on the generated URDF, solved without a seed (a seed near the pose
+is a Newton start of the solver, which would return the sampled q by itself: without one, the
+elimination alone must find it): the share of poses whose q came back (mod 2pi, 1e-6 rad), the
+worst oracle error of any returned solution, the median time per single call; the same seeded
+with the sampled q; special angles (joints in {0, +-pi/2, pi}), unseeded and seeded: wrong
+solutions and exceptions. Random tables (fixed seed): the same (unseeded), plus solution counts
+(before limits) even and at most 16. UR5 and IRB 1200: the same solution set as the family
+solvers (mod 2pi), both seeded with the sampled q.
 """
 
 from __future__ import annotations
@@ -68,23 +71,29 @@ def main() -> None:
     rng = np.random.default_rng(16)
     for name in ("fanuc_crx10ia", "xarm6", "ur5_tilted"):
         robot = ur5_tilted() if name == "ur5_tilted" else dhkin.load(name)
-        print(name, "random", measure(robot, robot.table.random_q(args.poses, rng), True))
+        Q = robot.table.random_q(args.poses, rng)
+        print(name, "random, unseeded", measure(robot, Q, False), flush=True)
+        print(name, "random, seeded", measure(robot, Q, True), flush=True)
         Q = np.clip(SPECIAL[rng.integers(0, 4, size=(args.special, 6))], robot.lower,
                     robot.upper)
-        print(name, "special", measure(robot, Q, False))
+        print(name, "special, unseeded", measure(robot, Q, False), flush=True)
+        print(name, "special, seeded", measure(robot, Q, True), flush=True)
     odd, over, recovered, total, worst, wrong = 0, 0, 0, 0, 0.0, 0
     for index in range(args.tables):
         table = random_table(rng, index)
         solver = General6RSolver(table)
         Q = rng.uniform(-math.pi, math.pi, size=(args.table_poses, 6))
         for q in Q:
-            roots, _, _ = solver.roots(solver.target_dh(table.fk(q)), q, 1e-9)
+            roots, _, _ = solver.roots(solver.target_dh(table.fk(q)), None, 1e-9)
+            if roots.shape[0] % 2:
+                print(f"odd count: table {index}, q = {q.tolist()}: {roots.shape[0]} roots",
+                      flush=True)
             odd += roots.shape[0] % 2
             over += roots.shape[0] > 16
             total += 1
             recovered += bool(roots.shape[0]) and bool(
                 np.min(np.max(np.abs(_wrap(roots - q)), axis=1)) < 1e-6)
-        figures = measure(Robot(table), Q[: max(1, args.table_poses // 10)], True)
+        figures = measure(Robot(table), Q[: max(1, args.table_poses // 10)], False)
         worst = max(worst, figures["worst"])
         wrong += int(figures["wrong"])
     print(f"random tables: {args.tables} x {args.table_poses} poses: recovered "

@@ -75,7 +75,8 @@ def run(robot: Robot, Q: np.ndarray, seeded: bool = True) -> tuple[int, float, i
 def test_arms_outside_the_families(name: str) -> None:
     robot = ur5_tilted() if name == "ur5_tilted" else dhkin.load(name)
     Q = robot.table.random_q(300, np.random.default_rng(16))
-    recovered, worst, _ = run(robot, Q)
+    # unseeded: a seed near the pose is a Newton start and would return q by itself
+    recovered, worst, _ = run(robot, Q, seeded=False)
     assert worst <= DEFAULT_TOLERANCE
     assert recovered == len(Q)
 
@@ -101,7 +102,7 @@ def test_random_tables_counts_even_and_complete() -> None:
             roots, _, _ = solver.roots(T_dh, None, DEFAULT_TOLERANCE)
             assert roots.shape[0] % 2 == 0 and roots.shape[0] <= 16
             assert np.min(np.max(np.abs(_wrap(roots - q)), axis=1)) < 1e-6
-        recovered, worst, _ = run(Robot(table), Q[:20])
+        recovered, worst, _ = run(Robot(table), Q[:20], seeded=False)
         assert worst <= DEFAULT_TOLERANCE and recovered == 20
 
 

@@ -145,7 +145,7 @@ class General6RSolver:
         from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
 
         out = np.empty((MAX_CANDIDATES, 6))
-        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out, np.empty(1))
+        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out, np.empty(2))
         return out[:count]
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
@@ -331,7 +331,7 @@ class General6RSolver:
         )
 
         starts = np.empty((MAX_CANDIDATES, 6))
-        info = np.empty(1)
+        info = np.empty(2)
         count = candidates(*self._data, np.ascontiguousarray(T_dh), starts, info)
         seeded = count
         if q_seed is not None:
@@ -343,7 +343,8 @@ class General6RSolver:
         band = singular_band(tolerance)
         ill_conditioned = not info[0] >= LEAD_CONDITION
         found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, count, seeded,
-                               tolerance, lever, band, ill_conditioned, roots, errors, sigmas)
+                               tolerance, lever, band, ill_conditioned, int(info[1]), roots,
+                               errors, sigmas)
         singular = sigmas[:found] <= band
         if ill_conditioned:
             singular[:] = True
@@ -393,12 +394,20 @@ class General6RSolver:
             q_out = np.concatenate([b for b, _, _ in blocks])
             residuals = np.concatenate([np.tile(e, (b.shape[0], 1)) for b, e, _ in blocks])
             out_flags = [f for b, _, f in blocks for _ in range(b.shape[0])]
+            q_out, residuals, out_flags = self._onto_limits(q_out, residuals, out_flags, chain,
+                                                            tip_target, tolerance, lever)
         else:
-            q_out, inside = self._nearest_copies(roots, reference, slack)
-            q_out, residuals = q_out[inside], errors[inside]
-            out_flags = [f for f, keep in zip(flags, inside, strict=True) if keep]
-        q_out, residuals, out_flags = self._onto_limits(q_out, residuals, out_flags, chain,
-                                                        tip_target, tolerance, lever)
+            from dhkin.ik.compiled.general6r import nearest_copies
+
+            found = roots.shape[0]
+            q_out, residuals = np.empty((found, 6)), np.empty((found, 2))
+            kept = np.empty(found, np.int64)
+            count = nearest_copies(chain, tip_target, roots, errors, found, reference,
+                                   self.table.lower, self.table.upper, slack,
+                                   self.verification_tolerance(tolerance, lever), q_out,
+                                   residuals, kept)
+            q_out, residuals = q_out[:count], residuals[:count]
+            out_flags = [flags[k] for k in kept[:count].tolist()]
         if q_out.shape[0] == 0:
             return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
                                dropped=failed,

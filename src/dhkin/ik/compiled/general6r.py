@@ -49,6 +49,15 @@ BUDGET = 120
 GROWTH = 1e6
 
 
+#: Refinement budget of a candidate from a near-real complex pair of eigenvalues: a real root
+#: of the chain that the model's rounding or its fold made complex lies within the imaginary
+#: band (0.1 rad) of the start and converges in a few Newton steps (at a double root linearly,
+#: halving per step: from 1e-8 to 1e-12 within ~15); a truly complex one never converges, and
+#: the full budget spent on it was most of the refinement's time (0.8 such per pose on the
+#: CRX-10iA and xArm6).
+PAIR_BUDGET = 40
+
+
 @jit
 def _dh(theta: float, d: float, a: float, alpha: float, out: NDArray[np.float64]) -> None:
     ct, st = math.cos(theta), math.sin(theta)
@@ -114,7 +123,8 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
     DH frame 6 of the exact chain, into out (MAX_CANDIDATES, 6); returns their number.
     info[0]: the reciprocal condition (1-norm) of the leading matrix used (below
     LEAD_CONDITION: no angle gave a well-conditioned one, the pose's eigenproblem is
-    ill-conditioned)."""
+    ill-conditioned); info[1]: how many candidates come from real eigenvalues (they come
+    first; then one per near-real complex pair, whose two members share their real part)."""
     shift, k, reverse = setup[SHIFT], int(setup[K]), setup[REVERSED] != 0.0
     target = _rigid_inverse(T_dh) if reverse else T_dh
     H = D0_inverse @ target @ E_inverse
@@ -171,10 +181,11 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
             work[12 + j, 12 + i] = -AB[i, j]
     wr, wi = np.empty(24), np.empty(24)
     vl = np.empty((1, 24))
-    vr = np.empty((24, 24))  # row j: eigenvector j (column-major)
-    info = _rgeev(ord("d"), ord("N"), ord("V"), 24, work.ctypes, 24, wr.ctypes, wi.ctypes,
-                  vl.ctypes, 24, vr.ctypes, 24)
-    if info != 0:
+    vr = np.empty((1, 24))  # not computed: eigenvalues only (null vectors below)
+    status = _rgeev(ord("d"), ord("N"), ord("N"), 24, work.ctypes, 24, wr.ctypes, wi.ctypes,
+                    vl.ctypes, 24, vr.ctypes, 24)
+    if status != 0:
+        info[1] = 0
         return 0
     count = 0
     Qpinv = np.zeros((8, 14))
@@ -186,7 +197,13 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
     theta = np.empty(6)
     x45 = np.empty(9)
     T1 = np.empty((4, 4))
-    for index in range(24):
+    real_count = 0
+    for order in range(48):  # real eigenvalues first, then one of each complex pair
+        index = order % 24
+        if order == 24:
+            real_count = count
+        if (order < 24) != (wi[index] == 0.0) or wi[index] < 0.0:
+            continue  # a pair's second member (wi < 0) gives the same real part
         x = complex(wr[index], wi[index])
         if abs(x) > 1e150:
             continue
@@ -194,10 +211,8 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
         if not (abs(angle.imag) <= setup[BAND]):
             continue
         theta_k = lead + angle.real
-        use_top = abs(x) <= 1.0
-        for i in range(4):
-            for j in range(3):
-                m[i, j] = vr[index, (0 if use_top else 12) + 3 * i + j]
+        if not _null_vector(A, Bm, C, 0.5 * angle.real, m):
+            continue
         theta_1 = _ratio_angle(m, 0)
         theta_2 = _ratio_angle(m, 1)
         theta[k], theta[k + 1], theta[k + 2] = theta_k, theta_1, theta_2
@@ -236,7 +251,90 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
             else:
                 out[count, j] = (v - offset[j]) / direction[j]
         count += 1
+    info[1] = real_count
     return count
+
+
+@jit
+def _null_vector(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64],
+                 half: float, out: NDArray[np.float64]) -> bool:
+    """The null vector of M(x) = A x^2 + B x + C at x = tan(half) (a real eigenvalue, or the
+    real part of a near-real pair), by two steps of inverse iteration on the 12 x 12 matrix
+    (one LU with partial pivoting, :func:`_lu`), into out (4, 3): the monomials x_a^i x_b^j up
+    to scale. Where |x| > 1 the reversed polynomial A + B y + C y^2, y = 1 / x, is used (the
+    same null vector; x = infinity is y = 0). Returns False if the iteration breaks down (not
+    finite)."""
+    c, s = math.cos(half), math.sin(half)
+    if abs(s) <= abs(c):
+        t = s / c
+        M = A * (t * t) + B * t + C
+    else:
+        y = c / s
+        M = A + B * y + C * (y * y)
+    pivots = np.empty(12, np.int64)
+    _lu(M, pivots)
+    v = np.ones(12)
+    for _ in range(2):
+        _lu_solve(M, pivots, v)
+        size = 0.0
+        for i in range(12):
+            size = max(size, abs(v[i]))
+        if not (size > 0.0 and size < math.inf):
+            return False
+        for i in range(12):
+            v[i] /= size
+    for i in range(4):
+        for j in range(3):
+            out[i, j] = v[3 * i + j]
+    return True
+
+
+@jit
+def _lu(M: NDArray[np.float64], pivots: NDArray[np.int64]) -> None:
+    """LU factorisation with partial pivoting of the square M, in place (L unit lower, U
+    upper; row i was swapped with pivots[i]). A pivot of exactly zero (M singular in the
+    arithmetic: the eigenvalue exact) is replaced by rounding's size, eps |M|, as inverse
+    iteration does, so that the solve below amplifies the null direction instead of
+    failing."""
+    n = M.shape[0]
+    tiny = 0.0
+    for i in range(n):
+        for j in range(n):
+            tiny = max(tiny, abs(M[i, j]))
+    tiny = max(tiny * 2.220446049250313e-16, 1e-300)
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[p, k]):
+                p = i
+        pivots[k] = p
+        if p != k:
+            for j in range(n):
+                M[k, j], M[p, j] = M[p, j], M[k, j]
+        if M[k, k] == 0.0:
+            M[k, k] = tiny
+        for i in range(k + 1, n):
+            factor = M[i, k] / M[k, k]
+            M[i, k] = factor
+            for j in range(k + 1, n):
+                M[i, j] -= factor * M[k, j]
+
+
+@jit
+def _lu_solve(LU: NDArray[np.float64], pivots: NDArray[np.int64], v: NDArray[np.float64]) -> None:
+    """v <- M^-1 v from :func:`_lu`'s factors, in place."""
+    n = LU.shape[0]
+    for k in range(n):
+        p = pivots[k]
+        if p != k:
+            v[k], v[p] = v[p], v[k]
+    for i in range(n):
+        for j in range(i):
+            v[i] -= LU[i, j] * v[j]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            v[i] -= LU[i, j] * v[j]
+        v[i] /= LU[i, i]
 
 
 @jit
@@ -295,15 +393,18 @@ def smallest_singular(chain: NDArray[np.float64], q: NDArray[np.float64], lever:
 @jit
 def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArray[np.float64],
            n_starts: int, seeded: int, tolerance: float, lever: float, band: float,
-           ill_conditioned: bool, roots: NDArray[np.float64], errors: NDArray[np.float64],
-           sigmas: NDArray[np.float64]) -> tuple[int, int]:
+           ill_conditioned: bool, paired: int, roots: NDArray[np.float64],
+           errors: NDArray[np.float64], sigmas: NDArray[np.float64]) -> tuple[int, int]:
     """Refine every start on the exact chain, keep those that verify, merge those that are
-    one root (close, and their midpoint verifies). Starts at index >= ``seeded`` (the seed)
-    are used only on a singular pose: when no candidate verified, a root is singular
-    (sigma <= ``band``) or the eigenproblem is ``ill_conditioned``; a regular pose's roots come
-    from the elimination alone. A seed starts damped, and its root, when it merges with a
-    root found before, replaces it if nearer the seed (on a curve of solutions, the seed's
-    member). Returns (roots found, candidates that did not verify); sigmas:
+    one root (close, and their midpoint verifies). The start at index ``seeded`` (the seed)
+    is used on a singular pose (no candidate verified, a root is singular, sigma <= ``band``,
+    or the eigenproblem is ``ill_conditioned``) and, as on the families' refined tables
+    (docs/ik_core.md), where the seed is within one maximal Newton step of the pose (rotation
+    error at most MAX_JOINT_STEP, position error at most MAX_JOINT_STEP x ``lever``); a seed
+    farther from a regular pose is not a start. A seed starts damped, and its root, when it
+    merges with a root found before, replaces it if nearer the seed (on a curve of solutions,
+    the seed's member). Starts from ``paired`` to ``seeded`` (near-real complex pairs of
+    eigenvalues) get PAIR_BUDGET. Returns (roots found, candidates that did not verify); sigmas:
     :func:`smallest_singular` of each root (``lever``, ``band``)."""
     target = np.ascontiguousarray(T_dh[:3])
     fixed = np.zeros(6, np.bool_)
@@ -316,12 +417,17 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
             singular = False
             for other in range(found):
                 singular = singular or sigmas[other] <= band
-            if not singular:
+            for j in range(6):
+                q[j] = starts[index, j]
+            position, rotation = check(chain, q, target, state)
+            near = rotation <= MAX_JOINT_STEP and position <= MAX_JOINT_STEP * lever
+            if not (singular or near):
                 break
         for j in range(6):
             q[j] = starts[index, j]
         damping = SEED_DAMPING if index >= seeded else 0.0
-        refine(chain, target, q, fixed, tolerance, BUDGET, GROWTH, damping)
+        budget = PAIR_BUDGET if paired <= index < seeded else BUDGET
+        refine(chain, target, q, fixed, tolerance, budget, GROWTH, damping)
         position, rotation = check(chain, q, target, state)
         if not (position <= tolerance and rotation <= tolerance):
             if index < seeded:
@@ -361,3 +467,51 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
         if slot == found:
             found += 1
     return found, failed
+
+
+@jit
+def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
+                   roots: NDArray[np.float64], errors: NDArray[np.float64], found: int,
+                   reference: NDArray[np.float64], lower: NDArray[np.float64],
+                   upper: NDArray[np.float64], slack: float, tolerance: float,
+                   out_q: NDArray[np.float64], out_errors: NDArray[np.float64],
+                   kept: NDArray[np.int64]) -> int:
+    """Per root, per joint its 2pi copy nearest ``reference`` within the limits widened by
+    ``slack`` (a value that far outside a limit counts as on it: set onto it and verified
+    again on ``chain`` against T (3 or 4 rows) at ``tolerance``, as in the families); roots
+    without such a copy, or that no longer verify, are left out. Writes the kept rows in
+    order into out_q, out_errors and their root indices into kept; returns their number."""
+    two_pi = 2.0 * math.pi
+    target = np.ascontiguousarray(T[:3])
+    state = np.empty(12)
+    q = np.empty(6)
+    count = 0
+    for k in range(found):
+        inside, moved = True, False
+        for j in range(6):
+            value = roots[k, j] + two_pi * np.rint((reference[j] - roots[k, j]) / two_pi)
+            if value < lower[j] - slack:
+                value += two_pi * math.ceil((lower[j] - slack - value) / two_pi)
+            if value > upper[j] + slack:
+                value -= two_pi * math.ceil((value - upper[j] - slack) / two_pi)
+            if value < lower[j] - slack or value > upper[j] + slack:
+                inside = False
+                break
+            if value < lower[j]:
+                value, moved = lower[j], True
+            elif value > upper[j]:
+                value, moved = upper[j], True
+            q[j] = value
+        if not inside:
+            continue
+        position, rotation = errors[k, 0], errors[k, 1]
+        if moved:
+            position, rotation = check(chain, q, target, state)
+            if not (position <= tolerance and rotation <= tolerance):
+                continue
+        for j in range(6):
+            out_q[count, j] = q[j]
+        out_errors[count, 0], out_errors[count, 1] = position, rotation
+        kept[count] = k
+        count += 1
+    return count

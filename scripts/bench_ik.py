@@ -654,7 +654,7 @@ def fmt(value: float, digits: int = 3) -> str:
 def report(robot: dhkin.Robot, rows: list[Row], skipped: list[tuple[str, str]],
            n: int) -> list[str]:
     like = next(r for r in rows if r.library.name == "dhkin")
-    lines = [f"### {robot.name} ({robot.ik_solver.family}), {n} poses", "",
+    lines = [f"### {robot.name} ({robot.ik_family}), {n} poses", "",
              "| library | single (us) | batch (poses/s) | sols/pose | max residual (m / rad) "
              "| exact | complete | q5 = 0: poses solved exactly, exact sols/pose, inexact share "
              "| dhkin speed-up, single | dhkin speed-up, batch |",

@@ -180,9 +180,12 @@ class General6RSolver:
         thetas = []
         for index in range(24):
             a, b = alpha[index], beta[index]
+            if not (np.isfinite(a) and np.isfinite(b)):
+                continue
             if abs(b) > abs(a) * 1e-300 and b != 0:
                 x = a / b
-                angle = 2.0 * np.arctan(x)
+                with np.errstate(divide="ignore", invalid="ignore"):  # x = +-i: spurious
+                    angle = 2.0 * np.arctan(x)
                 if not np.isfinite(angle) or abs(angle.imag) > IMAGINARY_BAND:
                     continue
                 theta_k = el.shift + float(angle.real)

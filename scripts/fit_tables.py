@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from dhkin.dh import DHTable
+from dhkin.files import write_file
 from dhkin.fit import fit_corrections, largest_correction, read_chain, structural_relations
 from dhkin.reference import Reference
 from dhkin.robot import builtin_dir
@@ -134,7 +135,7 @@ def main() -> int:
             if not path.is_file() or not same(load_table(path), fitted):
                 stale.append(path)
             continue
-        path.write_text(f"{table_to_yaml(fitted, header=header(entry))}", encoding="utf-8")
+        write_file(path, table_to_yaml(fitted, header=header(entry)), force=True)  # atomic
         print(f"written: {path}")
         print(figures(nominal, fitted, urdf))
     if args.check:

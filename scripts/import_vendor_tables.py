@@ -19,6 +19,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from dhkin.files import write_file
 from dhkin.importer import ImportResult, import_description
 from dhkin.robot import builtin_dir
 from dhkin.table_file import table_to_yaml
@@ -59,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
             if not target.is_file() or target.read_text(encoding="utf-8") != text:
                 stale.append(name)
             continue
-        target.write_text(text, encoding="utf-8")
+        write_file(target, text, force=True)  # atomic; regenerating replaces
         print(f"{target.relative_to(REPO)}\n  " + result.summary().replace("\n", "\n  "))
     if args.check:
         print(f"{len(stale)} imported table(s) stale" + (f": {stale}" if stale else ""))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from dhkin.files import write_file
 from dhkin.robot import builtin_dir, builtin_names, load
 from dhkin.urdf import generate
 
@@ -27,7 +28,7 @@ def main() -> int:
                 continue
             stale.append(path)
             if not args.check:
-                path.write_text(text, encoding="utf-8")
+                write_file(path, text, force=True)  # atomic; regenerating replaces
     verb = "stale" if args.check else "written"
     for path in stale:
         print(f"{verb}: {path}")

@@ -17,16 +17,17 @@ from .conftest import REPO
 SOURCE = REPO / "src"
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("foundation", ("dhkin.errors", "dhkin.transforms", "dhkin.dh", "dhkin.table_file",
+                    "dhkin.table_yaml", "dhkin.table_values",
                     "dhkin.reference", "dhkin.urdf", "dhkin.validators", "dhkin.vendors",
                     "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description",
-                    "dhkin.xml_text", "dhkin.axes_to_dh")),
+                    "dhkin.xml_text", "dhkin.axes_to_dh", "dhkin.files")),
     ("kinematics", ("dhkin.ik", "dhkin.ik.*", "dhkin.arm", "dhkin.opw",
                     "dhkin.opw_yaml")),
     ("analysis", ("dhkin.singularity", "dhkin.singularity.*", "dhkin.maps", "dhkin.maps.*",
                   "dhkin.validation", "dhkin.validation.*", "dhkin.compare",
                   "dhkin.importer")),
     ("facade", ("dhkin.robot",)),
-    ("application", ("dhkin", "dhkin.checks", "dhkin.cli")),
+    ("application", ("dhkin", "dhkin.checks", "dhkin.cli", "dhkin.cli_input")),
 )
 
 

@@ -19,7 +19,10 @@ from .conftest import REFERENCE_URDFS, REPO
 
 
 def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
+    try:
+        code = main(list(argv))
+    except SystemExit as exit_:  # argparse's usage errors (one line, exit 2)
+        code = int(exit_.code or 0)
     captured = capsys.readouterr()
     return code, captured.out, captured.err
 
@@ -316,7 +319,7 @@ def test_cli_validate_vendor_frames(capsys, monkeypatch) -> None:
     (["--reference", "no_such_vendor.urdf"], "--reference"),
     (["--reference", "../shared/reference/ur5.urdf", "--base", "floor"], "--base"),
     (["--reference", "exact", "--tip", "tool0"], "--tip"),
-    (["-n", "0"], "n: expected at least 1 sample"),
+    (["-n", "0"], "argument -n: expected an integer >= 1"),
 ])
 def test_cli_validate_bad_arguments(capsys, monkeypatch, args: list[str], named: str) -> None:
     monkeypatch.chdir(REPO)

@@ -243,7 +243,8 @@ def test_correction_fields_and_nominal() -> None:
 
 BAD_CORRECTIONS = [
     ([0, 0, 0], "joints[2].correction", "expected a mapping {xyz: [x, y, z], rpy: [r, p, y]}"),
-    (None, "joints[2].correction", "expected a mapping"),
+    # (None: `correction:` left empty means no correction, like every optional key left empty)
+    ("0 0 0", "joints[2].correction", "expected a mapping"),
     ({"rot": [0, 0, 1]}, "joints[2].correction.rot", "unknown key; expected one of ['xyz', 'rpy']"),
     ({"xyz": [1, 2]}, "joints[2].correction.xyz", "expected a list of 3 numbers, got [1, 2]"),
     ({"xyz": [1, 2, 3, 4]}, "joints[2].correction.xyz", "expected a list of 3 numbers"),

@@ -30,7 +30,8 @@ BAD_CASES: list[tuple[str, str, str]] = [
     ("unknown_top_key", "tcp", "unknown key; expected one of ['name', 'convention'"),
     ("unknown_joint_key", "joints[1].alhpa", "unknown key; expected one of ['a', 'alpha'"),
     ("unknown_frame_key", "base.rot", "unknown key; expected one of ['xyz', 'rpy']"),
-    ("duplicate_key", "a", "given twice in one mapping (lines 7 and 7); expected each key once"),
+    ("duplicate_key", "joints[1].a",
+     "given twice in one mapping (line 7, columns 6 and 59); expected each key once"),
     # missing keys
     ("missing_top_key", "convention", "missing required key"),
     ("missing_joint_key", "joints[1].lower", "missing required key"),

@@ -284,7 +284,9 @@ def test_missing_links_are_listed(tmp_path: Path) -> None:
 
 def test_loop_is_an_error(tmp_path: Path) -> None:
     path = _two_link(tmp_path, '<child link="link_2"/>', '<child link="link_1"/>')
-    with pytest.raises(URDFError, match=f"{path}: link 'link_1' is the child of joints"):
+    with pytest.raises(URDFError, match=f"{path}: kinematic loop closed by joint 'joint_2' "
+                                        r"\(line 1\): link 'link_1' is already the child of "
+                                        "joint 'joint_1'"):
         import_description(path)
 
 
@@ -310,7 +312,8 @@ def test_not_a_urdf(tmp_path: Path) -> None:
         import_description(text_file)
     broken = tmp_path / "broken.urdf"
     broken.write_text("<robot name='x'><link name='a'></robot>")
-    with pytest.raises(URDFError, match=f"{broken}: not a valid URDF"):
+    with pytest.raises(URDFError, match=f"{broken}: not well-formed XML "
+                                        r"\(mismatched tag at line 1, column"):
         import_description(broken)
     binary = tmp_path / "binary.urdf"
     binary.write_bytes(b"\xff\xfe\x00<robot")

@@ -116,9 +116,9 @@ def test_conventions_are_related_by_the_frame_pose(name: str) -> None:
 
 
 def test_unknown_convention_is_an_error() -> None:
-    """A misspelt reference frame raises URDFError listing the three conventions."""
+    """A misspelt reference frame raises InputError listing the three conventions."""
     reference = dhkin.load("ur5").reference()
-    with pytest.raises(dhkin.URDFError, match=r"reference: expected one of \['local', 'world'"):
+    with pytest.raises(dhkin.InputError, match=r"reference: expected one of \['local', 'world'"):
         reference.jacobian(np.zeros(6), reference="global")  # type: ignore[arg-type]
 
 

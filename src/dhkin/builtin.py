@@ -26,7 +26,10 @@ def resolve_table_path(name_or_path: str | Path) -> Path:
     candidate = Path(name_or_path)
     if candidate.suffix in (".yaml", ".yml") or candidate.exists():
         if not candidate.is_file():
-            raise RobotNotFoundError(f"{candidate}: no such DH table file", field="robot",
+            what = ("is a folder, not a DH table file" if candidate.is_dir()
+                    else "is not a regular file" if candidate.exists()
+                    else "no such DH table file")
+            raise RobotNotFoundError(f"{candidate}: {what}", field="robot",
                                      value=str(candidate), expected="a DH table file")
         return candidate
     builtin = builtin_dir() / f"{name_or_path}.yaml"

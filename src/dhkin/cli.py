@@ -5,18 +5,35 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from dhkin.cli_input import (
+    EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE,
+    EXIT_FAILED,
+    EXIT_OK,
+    Parser,
+    angles,
+    finite_float,
+    force_arg,
+    ik_target,
+    input_error_text,
+    non_negative_float,
+    non_negative_int,
+    output_name,
+    positive_float,
+    positive_int,
+    xacro_arguments,
+)
 from dhkin.errors import DhkinError, InputError
 from dhkin.robot import Robot, builtin_dir, builtin_names, load
 from dhkin.tolerances import DEFAULT_TOLERANCE
-from dhkin.transforms import matrix_to_rpy, xyz_rpy_to_matrix
-
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+from dhkin.transforms import matrix_to_rpy
 
 
 def _robot_arg(parser: argparse.ArgumentParser) -> None:
@@ -44,11 +61,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.format == "opw":
         from dhkin.opw_yaml import export_opw
 
-        print(export_opw(robot.table, args.output))
+        print(export_opw(robot.table, args.output, force=args.force))
         return EXIT_OK
     from dhkin.urdf import export
 
-    for path in export(robot.table, args.output):
+    for path in export(robot.table, args.output, force=args.force):
         print(path)
     return EXIT_OK
 
@@ -72,51 +89,22 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def cmd_import(args: argparse.Namespace) -> int:
+    from dhkin.files import check_output, write_file
     from dhkin.importer import import_description
 
     output = Path(args.output)
     if output.suffix not in (".yaml", ".yml"):
         raise InputError(f"-o {output}: expected a .yaml table file name", field="output",
                          value=str(output), expected="a path ending in .yaml")
-    if output.exists() and not args.force:
-        raise InputError(f"-o {output}: the file exists; expected a new file name, or --force "
-                         "to replace it", field="output", value=str(output),
-                         expected="a file that does not exist (or --force)")
-    if not output.parent.is_dir():
-        raise InputError(f"-o {output}: no folder {output.parent}; expected an existing folder",
-                         field="output", value=str(output), expected="an existing folder")
+    check_output(output, "-o", force=True)  # folder, link, writable; the content is compared last
     result = import_description(args.description, base=args.base, tip=args.tip,
                                 convention=args.convention,
                                 units={"length": args.length, "angle": args.angle},
-                                xacro_args=_xacro_arguments(args.xacro_arg), name=args.name)
-    partial = output.with_name(f".{output.name}.partial")
-    try:
-        partial.write_text(result.yaml(), encoding="utf-8")
-        partial.replace(output)
-    except OSError as exc:
-        partial.unlink(missing_ok=True)
-        raise InputError(f"-o {output}: cannot write the table ({exc.strerror})",
-                         field="output", value=str(output), expected="a writable file") from exc
+                                xacro_args=xacro_arguments(args.xacro_arg), name=args.name)
+    write_file(output, result.yaml(), "-o", force=args.force)
     print(result.summary())
     print(f"wrote {output}")
     return EXIT_OK
-
-
-def _xacro_arguments(values: Sequence[str] | None) -> dict[str, str]:
-    """``NAME:=VALUE`` strings -> {NAME: VALUE} (InputError naming a malformed one)."""
-    arguments = {}
-    for value in values or ():
-        name, separator, text = value.partition(":=")
-        if not separator or not name:
-            raise InputError(f"--xacro-arg {value!r}: expected NAME:=VALUE", field="xacro-arg",
-                             value=value, expected="NAME:=VALUE")
-        arguments[name] = text
-    return arguments
-
-
-def _angles(values: Sequence[float], degrees: bool) -> np.ndarray:
-    array = np.asarray(values, dtype=float)
-    return np.radians(array) if degrees else array
 
 
 def _joint_values(robot: Robot, values: Sequence[float], degrees: bool,
@@ -149,24 +137,9 @@ def cmd_fk(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _target(args: argparse.Namespace) -> np.ndarray:
-    if args.matrix is not None:
-        try:
-            T = np.loadtxt(args.matrix, dtype=float)
-        except (OSError, ValueError) as exc:
-            raise DhkinError(f"{args.matrix}: expected a 4x4 matrix of numbers ({exc})") from exc
-        if T.shape != (4, 4):
-            raise DhkinError(f"{args.matrix}: expected a 4x4 matrix, got shape {T.shape}")
-        return T
-    if args.xyz is None:
-        raise DhkinError("ik: give the target as --xyz X Y Z [--rpy R P Y] or --matrix FILE")
-    rpy = _angles(args.rpy if args.rpy is not None else [0, 0, 0], args.deg)
-    return xyz_rpy_to_matrix(args.xyz, rpy)
-
-
 def cmd_ik(args: argparse.Namespace) -> int:
     robot = load(args.robot)
-    T = _target(args)
+    T = ik_target(args)
     seed = None if args.seed is None else _joint_values(robot, args.seed, args.deg)
     solutions = robot.ik(T, q_seed=seed, copies=args.all_copies)
     revolute = np.array([j.is_revolute for j in robot.table.joints])
@@ -197,18 +170,23 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    from dhkin.files import check_output, unused_name, write_file
     from dhkin.validation import (
         adapt,
+        failures_json,
         load_ik,
         own_ik,
         replay,
         tool_frame_from_robot,
         validate,
-        write_failures,
     )
     from dhkin.validation.arguments import check_command_line
 
     check_command_line(args)
+    for option, output in (("--json", args.json), ("--report", args.report),
+                           ("--failures", args.failures)):
+        if output is not None:  # checked before the run, so that no result is lost after it
+            check_output(output, option, force=args.force)
     robot = load(args.robot)
     ik, name = None, args.ik  # None: the robot's own IK, closed form or numerical, as the API
     if args.ik is None:
@@ -231,11 +209,15 @@ def cmd_validate(args: argparse.Namespace) -> int:
                           tip=args.tip, timeout=args.timeout, isolate=args.isolate)
     print(report.summary())
     if args.json:
-        Path(args.json).write_text(json.dumps(report.to_json(), indent=1), encoding="utf-8")
+        write_file(args.json, json.dumps(report.to_json(), indent=1), "--json", args.force)
     if args.report:
-        Path(args.report).write_text(report.markdown(), encoding="utf-8")
+        write_file(args.report, report.markdown(), "--report", args.force)
     if report.failures:
-        path = write_failures(report, args.failures or f"{robot.name}_ik_failures.json")
+        text = failures_json(report)
+        path = args.failures or f"{robot.name}_ik_failures.json"
+        if args.failures is None and not args.force:  # a default name replaces nothing
+            path = unused_name(path, text)
+        path = write_file(path, text, "--failures", args.force)
         print(f"failures written to {path} (rerun on the same reference: dhkin validate "
               f"{args.robot} --replay {path}{' --ik ' + args.ik if args.ik else ''})")
     return EXIT_OK if report.ok else EXIT_FAILED
@@ -271,12 +253,14 @@ def _add_singularity_arguments(parser: argparse.ArgumentParser) -> None:
     from dhkin.singularity import DEFAULT_THRESHOLDS, DISTANCE_UNITS, KINDS
 
     _robot_arg(parser)
-    parser.add_argument("q", type=float, nargs="+", help="joint values (rad and m, or --deg)")
+    parser.add_argument("q", type=finite_float, nargs="+",
+                        help="joint values (rad and m, or --deg)")
     parser.add_argument("--deg", action="store_true", help="revolute joint values in degrees")
     for kind in KINDS:
-        parser.add_argument(f"--{kind}", type=float, default=DEFAULT_THRESHOLDS.of(kind),
-                            metavar="T", help=f"{kind} threshold ({DISTANCE_UNITS[kind]}, "
-                                              f"default {DEFAULT_THRESHOLDS.of(kind):g})")
+        parser.add_argument(f"--{kind}", type=non_negative_float,
+                            default=DEFAULT_THRESHOLDS.of(kind), metavar="T",
+                            help=f"{kind} threshold ({DISTANCE_UNITS[kind]}, "
+                                 f"default {DEFAULT_THRESHOLDS.of(kind):g})")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
 
 
@@ -303,21 +287,24 @@ def _add_map_arguments(parser: argparse.ArgumentParser) -> None:
     from dhkin.maps import DEFAULT_JOINT_RESOLUTION, DEFAULT_RESOLUTION, PLANES
 
     _robot_arg(parser)
-    parser.add_argument("-o", "--output", required=True, help="PNG file to write")
+    parser.add_argument("-o", "--output", required=True, type=output_name,
+                        help="PNG file to write (its folder must exist)")
+    force_arg(parser)
     parser.add_argument("--plane", choices=sorted(PLANES), default="xz",
                         help="workspace slice plane of base_link (default xz)")
-    parser.add_argument("--offset", type=float, default=0.0,
+    parser.add_argument("--offset", type=finite_float, default=0.0,
                         help="the plane's third coordinate (m, default 0)")
-    parser.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
+    parser.add_argument("--rpy", type=finite_float, nargs=3, metavar=("R", "P", "Y"),
                         help="tool0 orientation, URDF rpy (rad, or --deg); default per family: "
                              "tool0 z along +x (spherical wrist, Stanford), horizontal at "
                              "45 deg to the slice (offset wrist)")
-    parser.add_argument("--q", type=float, nargs="+", metavar="Q",
+    parser.add_argument("--q", type=finite_float, nargs="+", metavar="Q",
                         help="joint values held fixed in the joint slices (rad and m, or --deg)")
     parser.add_argument("--deg", action="store_true", help="angles of --rpy and --q in degrees")
-    parser.add_argument("--resolution", type=int, default=DEFAULT_RESOLUTION,
+    parser.add_argument("--resolution", type=positive_int, default=DEFAULT_RESOLUTION,
                         help=f"workspace grid cells per side (default {DEFAULT_RESOLUTION})")
-    parser.add_argument("--joint-resolution", type=int, default=DEFAULT_JOINT_RESOLUTION,
+    parser.add_argument("--joint-resolution", type=positive_int,
+                        default=DEFAULT_JOINT_RESOLUTION,
                         help=f"joint grid cells per side (default {DEFAULT_JOINT_RESOLUTION})")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -329,19 +316,20 @@ def cmd_map(args: argparse.Namespace) -> int:
     robot = load(args.robot)
     rpy = None
     if args.rpy is not None:
-        rpy = [float(v) for v in _angles(args.rpy, bool(args.deg))]
+        rpy = [float(v) for v in angles(args.rpy, bool(args.deg))]
     q_fixed = None
     if args.q is not None:
         q_fixed = _joint_values(robot, args.q, bool(args.deg), "--q")
     maps = draw_maps(robot, args.output, plane=args.plane, offset=args.offset, rpy=rpy,
                      resolution=args.resolution, joint_resolution=args.joint_resolution,
-                     q_fixed=q_fixed, progress=not args.no_progress and sys.stderr.isatty())
+                     q_fixed=q_fixed, progress=not args.no_progress and sys.stderr.isatty(),
+                     force=args.force)
     print(describe(maps))
     return EXIT_OK
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="dhkin", description="Kinematics of serial arms from DH tables, checked against "
                                   "Pinocchio. ROBOT is a built-in name or a path to a table.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -352,7 +340,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("export", help="write <name>_macro.xacro, <name>.urdf.xacro, <name>.urdf "
                                       "(or, --format opw, <name>_opw.yaml)")
     _robot_arg(p)
-    p.add_argument("-o", "--output", required=True, help="output folder (created if needed)")
+    p.add_argument("-o", "--output", required=True, type=output_name,
+                   help="output folder (created if needed)")
+    force_arg(p)
     p.add_argument("--format", choices=("urdf", "opw"), default="urdf",
                    help="urdf: the xacro macro, its top-level xacro and the URDF (default); "
                         "opw: MoveIt opw_kinematics parameters (spherical-wrist arms with an "
@@ -366,9 +356,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--base-frame", default="base_link", help="base frame in the other URDF")
     p.add_argument("--tip", default="tool0", help="tip frame in the other URDF")
     p.add_argument("--robot-tip", default="tool0", help="tip frame of our URDF")
-    p.add_argument("-n", type=int, default=1000, help="joint vectors to sample (default 1000)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+    p.add_argument("-n", type=positive_int, default=1000,
+                   help="joint vectors to sample (default 1000)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
+    p.add_argument("--tolerance", type=positive_float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
     p.add_argument("--strict", action="store_true",
                    help="also fail (exit 1) on any difference of joint names, types, limits or "
@@ -377,7 +368,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("import", help="import a URDF or xacro description as a DH table")
     p.add_argument("description", help="the URDF or xacro file")
-    p.add_argument("-o", "--output", required=True, help="the table file to write (.yaml)")
+    p.add_argument("-o", "--output", required=True, type=output_name,
+                   help="the table file to write (.yaml)")
     p.add_argument("--base", help="base link of the chain (default: the root link)")
     p.add_argument("--tip", help="tip link of the chain (default: the single leaf link)")
     p.add_argument("--convention", choices=("standard", "modified"), default="standard",
@@ -393,7 +385,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("fk", help="forward kinematics base_link -> tool0 (or --frame)")
     _robot_arg(p)
-    p.add_argument("q", type=float, nargs="+", help="joint values (rad and m, or --deg)")
+    p.add_argument("q", type=finite_float, nargs="+", help="joint values (rad and m, or --deg)")
     p.add_argument("--deg", action="store_true", help="revolute values and rpy in degrees")
     p.add_argument("--frame", default="tool0", help="frame of the generated URDF")
     p.set_defaults(run=cmd_fk)
@@ -401,11 +393,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("ik", help="the IK solutions of a pose: one per branch, its in-limit "
                                   "2pi copy nearest the seed (every copy: --all-copies)")
     _robot_arg(p)
-    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"), help="position (m)")
-    p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
-                   help="URDF roll-pitch-yaw of tool0 (rad, or --deg)")
-    p.add_argument("--matrix", help="file with the 4x4 pose base_link -> tool0")
-    p.add_argument("--seed", type=float, nargs="+",
+    target = p.add_mutually_exclusive_group(required=True)
+    target.add_argument("--xyz", type=finite_float, nargs=3, metavar=("X", "Y", "Z"),
+                        help="position (m), with --rpy (default 0 0 0)")
+    target.add_argument("--matrix", help="file with the 4x4 pose base_link -> tool0")
+    p.add_argument("--rpy", type=finite_float, nargs=3, metavar=("R", "P", "Y"),
+                   help="URDF roll-pitch-yaw of tool0 (rad, or --deg; with --xyz only)")
+    p.add_argument("--seed", type=finite_float, nargs="+",
                    help="joint values: each branch's copy nearest them, and the free joints at "
                         "a singularity (default 0)")
     p.add_argument("--all-copies", action="store_true",
@@ -421,22 +415,27 @@ def build_parser() -> argparse.ArgumentParser:
                                         "description (rounded, exact or a vendor URDF)")
     _robot_arg(p)
     p.add_argument("--ik", help="module:function of an IK, ik(T) -> joint vectors (default: ours)")
-    p.add_argument("-n", type=int, default=10_000, help="uniform samples (default 10000), plus "
-                                                         "n/10 special and n/10 near-singular")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE,
+    p.add_argument("-n", type=positive_int, default=10_000,
+                   help="uniform samples (default 10000), plus n/10 special and n/10 near-singular")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
+    p.add_argument("--tolerance", type=positive_float, default=DEFAULT_TOLERANCE,
                    help=f"m and rad (default {DEFAULT_TOLERANCE:g})")
-    p.add_argument("--joint-tolerance", type=float, default=DEFAULT_JOINT_TOLERANCE,
+    p.add_argument("--joint-tolerance", type=positive_float, default=DEFAULT_JOINT_TOLERANCE,
                    help=f"rad / m: same joint vector (default {DEFAULT_JOINT_TOLERANCE:g})")
     p.add_argument("--deg", action="store_true", help="the --ik IK works in degrees")
     p.add_argument("--ik-frame", help="the --ik IK solves for this frame of our URDF, not tool0")
-    p.add_argument("--timeout", type=float, default=DEFAULT_CALL_TIMEOUT, help="seconds per IK "
-                   f"call, else a failure of its pose (default {DEFAULT_CALL_TIMEOUT:g})")
+    p.add_argument("--timeout", type=positive_float, default=DEFAULT_CALL_TIMEOUT,
+                   help=f"seconds per IK call, else a failure of its pose "
+                        f"(default {DEFAULT_CALL_TIMEOUT:g})")
     p.add_argument("--isolate", action="store_true", help="call the IK in a child process: a "
                    "crash or a hang it swallows fails its pose, not the run")
-    p.add_argument("--json", help="write the report as JSON to this file")
-    p.add_argument("--report", help="write the report as Markdown to this file")
-    p.add_argument("--failures", help="failure file (default <robot>_ik_failures.json)")
+    p.add_argument("--json", type=output_name, help="write the report as JSON to this file")
+    p.add_argument("--report", type=output_name,
+                   help="write the report as Markdown to this file")
+    p.add_argument("--failures", type=output_name,
+                   help="failure file (default <robot>_ik_failures.json, or -2, -3, ... "
+                        "rather than replace an earlier one)")
+    force_arg(p)
     p.add_argument("--replay", help="rerun the samples of a failure file (on the reference it "
                                     "records)")
     p.add_argument("--reference", help="description that makes the targets and checks the "
@@ -462,20 +461,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")
     p.add_argument("--all", action="store_true", help="check every built-in robot")
     p.add_argument("--reference-dir", help="folder of vendor URDFs (default ../shared/reference)")
-    p.add_argument("--ik-poses", type=int, default=10_000, help="IK poses per robot")
-    p.add_argument("--vendor-poses", type=int, default=None,
+    p.add_argument("--ik-poses", type=positive_int, default=10_000, help="IK poses per robot")
+    p.add_argument("--vendor-poses", type=positive_int, default=None,
                    help="IK poses per robot on its vendor URDF (default 2000)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
     p.set_defaults(run=cmd_check)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one subcommand. Every failure of the input (dhkin's errors, files that cannot be read
+    or written, text that is not UTF-8, input nested too deeply or too large for memory) is one
+    line on stderr, ``dhkin: error: ...``, and exit status 2; a reader of stdout that goes away
+    (``| head``) ends the command quietly."""
     args = build_parser().parse_args(argv)
     try:
-        return int(args.run(args))
-    except DhkinError as exc:
-        print(f"dhkin: error: {exc}", file=sys.stderr)
+        status = int(args.run(args))
+        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        return status
+    except BrokenPipeError:
+        # The recipe of the `signal` module's documentation: no further writes to the pipe.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return EXIT_BROKEN_PIPE
+    except (DhkinError, OSError, UnicodeDecodeError, RecursionError, MemoryError) as exc:
+        print(f"dhkin: error: {input_error_text(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
 

@@ -28,8 +28,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.arm import Arm
+from dhkin.description import read_urdf_file
 from dhkin.dh import DHTable
 from dhkin.errors import InputError, URDFError
+from dhkin.ik.inputs import check_integer, check_tolerance
 from dhkin.reference import JointProperties, Reference, stated_velocity
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
@@ -211,6 +213,19 @@ class CompareReport:
         return "\n".join(lines)
 
 
+def _refuse_mimic_joints(other: Reference, base_frame: str, tip: str) -> None:
+    """URDFError when a joint on the compared chain mimics another: Pinocchio reads a mimic
+    joint as an independent one (or drops it), so the poses compared would not be the other
+    description's."""
+    for joint in other.outline.joints_above(tip, base_frame):
+        if joint.mimic is not None and joint.type != "fixed":
+            raise URDFError(f"{other.source}: joint {joint.name!r} (line {joint.line}) on the "
+                            f"chain {base_frame} -> {tip} mimics {joint.mimic!r}; a compared "
+                            "joint needs its own value: expected no mimic joint on the chain",
+                            field="joint", value=joint.name,
+                            expected="no mimic joint on the chain")
+
+
 def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base_link",
                       tip: str = "tool0", robot_tip: str = "tool0", n: int = 1000, seed: int = 0,
                       tolerance: float = DEFAULT_TOLERANCE,
@@ -218,21 +233,21 @@ def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base
     """Compare ``robot`` (base_link -> robot_tip) with ``urdf_path`` (base_frame -> tip): poses
     over ``n`` joint vectors (``tolerance``, m and rad) and the chain joints' names, types,
     limits and velocities (``limit_tolerance``)."""
+    n = check_integer(n, "n", 1)
+    seed = check_integer(seed, "seed", 0)
+    tolerance = check_tolerance(tolerance)
+    if isinstance(limit_tolerance, bool) or not isinstance(limit_tolerance, (int, float)) \
+            or not 0 <= limit_tolerance < float("inf"):
+        raise InputError(f"limit_tolerance: expected a number >= 0 (finite), got "
+                         f"{limit_tolerance!r}", field="limit_tolerance", value=limit_tolerance,
+                         expected="a finite number >= 0")
     path = Path(urdf_path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise URDFError(f"{path}: cannot read URDF ({exc.strerror})") from exc
-    other = Reference(text, tip=tip, base=base_frame, source=str(path))
+    other = Reference(read_urdf_file(path), tip=tip, base=base_frame, source=str(path))
+    _refuse_mimic_joints(other, base_frame, tip)
     ours = robot.reference(tip=robot_tip)
     if other.dof != robot.dof:
         raise URDFError(f"{path}: the chain {base_frame} -> {tip} has {other.dof} actuated joints "
                         f"{other.joint_names}; expected {robot.dof} like {robot.name}")
-    if n < 1:
-        raise URDFError(f"n: expected at least 1 sample, got {n}")
-    if not limit_tolerance >= 0:
-        raise InputError(f"limit_tolerance: expected a number >= 0, got {limit_tolerance!r}",
-                         field="limit_tolerance", value=limit_tolerance, expected="a number >= 0")
     joints = table_joint_properties(robot.table)
     other_joints = other.joint_properties()
     rng = np.random.default_rng(seed)

@@ -66,6 +66,34 @@ def fixed_joint_names(last_link: str) -> tuple[str, str, str]:
 DEFAULT_FLANGE_RPY_DEG = (0.0, -90.0, 0.0)
 
 
+#: Most joints a table may have. dhkin is for serial arms: industrial arms have 6 joints, redundant
+#: arms 7, an arm on a linear track or a positioner a few more; 32 covers every real arm with room,
+#: and keeps every per-joint cost bounded (FK frames, the URDF, Pinocchio's model, the IK's 2pi
+#: copies): 500 joints made ``reference()`` peak at 8 GB and 10^4 crashed ``dhkin fk``.
+MAX_JOINTS = 32
+
+
+#: Largest magnitude of a revolute joint's limits, in turns (2 turns: +-720 deg, +-4pi rad). The
+#: widest real joint in robots/ and in the vendor URDFs of ../shared/reference turns +-360.6 deg
+#: (Motoman GP7 joint 6), datasheets go to +-400 deg (ABB wrists) and continuous joints are imported
+#: as +-360 deg. The IK lists every in-limit 2pi copy of a solution: within +-2 turns a joint has at
+#: most 6 copies (a 6-joint branch at most 6^6), where +-36000 deg asked for 229 TiB.
+MAX_JOINT_TURNS = 2
+
+
+#: Largest magnitude of any length in a table, in metres (a, d, a prismatic joint's offset and
+#: limits, the xyz of base, tool, flange and corrections). The largest arms reach about 4 m and
+#: linear tracks tens of metres; 1 km covers any real machine, and keeps lengths where double
+#: precision still resolves the IK's 1e-9 m verification tolerance with a margin of 1000
+#: (1e3 m * 2.2e-16 = 2e-13 m) and where no FK or IK product of lengths can overflow.
+MAX_LENGTH = 1000.0
+
+
+#: Slack of the limit checks against rounding when a table's degrees or millimetres are
+#: converted (720 deg * pi / 180 may differ from 4 pi by an ulp).
+_LIMIT_SLACK = 1e-9
+
+
 #: A joint without a correction: (x, y, z) m, (roll, pitch, yaw) rad, all zero.
 NO_CORRECTION: tuple[float, float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
@@ -125,6 +153,9 @@ class DHTable:
     source: str = ""
     path: Path | None = None
 
+    def __post_init__(self) -> None:
+        check_table_limits(self)
+
     @property
     def dof(self) -> int:
         return len(self.joints)
@@ -165,7 +196,7 @@ class DHTable:
     def link_transforms(self, q: ArrayLike) -> NDArray[np.float64]:
         """A_i(q) @ C_i for every joint (C_i: the joint's correction, identity without one):
         (N, n) joint values -> (N, n, 4, 4)."""
-        Q = _as_batch(q, self.dof)
+        Q, _ = joint_batch(q, self.dof)
         theta, d = self.dh_parameters(Q)
         a = np.array([j.a for j in self.joints])
         alpha = np.array([j.alpha for j in self.joints])
@@ -191,8 +222,7 @@ class DHTable:
 
     def fk(self, q: ArrayLike) -> NDArray[np.float64]:
         """base_link -> tool0. q: (n,) -> (4, 4); (N, n) -> (N, 4, 4)."""
-        Q = np.asarray(q, dtype=float)
-        single = Q.ndim == 1
+        Q, single = joint_batch(q, self.dof)
         A = self.link_transforms(Q)
         T = np.broadcast_to(self.base, (A.shape[0], 4, 4)).copy()
         for i in range(self.dof):
@@ -208,6 +238,49 @@ class DHTable:
     def random_q(self, n: int, rng: np.random.Generator) -> NDArray[np.float64]:
         """n joint vectors drawn uniformly within the limits, shape (n, dof)."""
         return rng.uniform(self.lower, self.upper, size=(n, self.dof))
+
+
+def check_table_limits(table: DHTable) -> None:
+    """Raise a :class:`DHError` naming the field when ``table`` exceeds a limit of this module:
+    more than :data:`MAX_JOINTS` joints (checked first, before anything per joint), a revolute
+    limit beyond :data:`MAX_JOINT_TURNS` turns, a length beyond :data:`MAX_LENGTH` metres, or a
+    value that is not finite. Every :class:`DHTable` is checked when it is made."""
+    count = len(table.joints)
+    if count > MAX_JOINTS:
+        raise DHError(field="joints", value=count,
+                      expected=f"at most {MAX_JOINTS} joints (dhkin.dh.MAX_JOINTS)")
+    for label, T in (("base", table.base), ("tool", table.tool), ("flange", table.flange)):
+        matrix = np.asarray(T, dtype=float)
+        if matrix.shape != (4, 4) or not np.all(np.isfinite(matrix)):
+            raise DHError(field=label, value=f"shape {matrix.shape}",
+                          expected="a finite (4, 4) transform")
+        for k in range(3):
+            _check_length(float(matrix[k, 3]), f"{label}.xyz[{k}]")
+    for i, joint in enumerate(table.joints):
+        label = f"joints[{i}]"
+        for key in ("a", "alpha", "d", "theta", "offset", "velocity", "effort"):
+            if not math.isfinite(getattr(joint, key)):
+                raise DHError(field=f"{label}.{key}", value=getattr(joint, key),
+                              expected="a finite number")
+        for key in ("a", "d") + (() if joint.is_revolute else ("offset", "lower", "upper")):
+            _check_length(getattr(joint, key), f"{label}.{key}")
+        for k in range(3):
+            _check_length(joint.correction[k], f"{label}.correction.xyz[{k}]")
+        if joint.is_revolute:
+            for key in ("lower", "upper"):
+                value = getattr(joint, key)
+                if not abs(value) <= MAX_JOINT_TURNS * 2 * math.pi + _LIMIT_SLACK:
+                    raise DHError(field=f"{label}.{key}", value=value,
+                                  expected=f"a revolute joint limit within "
+                                           f"+-{MAX_JOINT_TURNS * 2 * math.pi:.6g} rad "
+                                           f"(+-{MAX_JOINT_TURNS} turns, dhkin.dh.MAX_JOINT_TURNS)")
+
+
+def _check_length(value: float, field_name: str) -> None:
+    """Raise a DHError unless ``value`` (metres) lies within +-:data:`MAX_LENGTH`."""
+    if not abs(value) <= MAX_LENGTH + _LIMIT_SLACK:
+        raise DHError(field=field_name, value=value,
+                      expected=f"a length within +-{MAX_LENGTH:g} m (dhkin.dh.MAX_LENGTH)")
 
 
 def dh_matrices(
@@ -244,13 +317,60 @@ def _default_flange() -> NDArray[np.float64]:
     return xyz_rpy_to_matrix((0, 0, 0), np.radians(DEFAULT_FLANGE_RPY_DEG))
 
 
-def _as_batch(q: ArrayLike, dof: int) -> NDArray[np.float64]:
-    Q = np.asarray(q, dtype=float)
-    if Q.ndim == 1:
+#: numpy kinds a joint value may have: signed and unsigned integers, floats, and Python objects
+#: that convert to float (Decimal, Fraction). Booleans, complex numbers, text, bytes and dates
+#: are refused rather than converted: numpy would read True as 1 and "1.5" as 1.5, hiding a
+#: caller's mistake.
+JOINT_VALUE_KINDS = "iufO"
+
+
+def joint_batch(q: ArrayLike, dof: int, field: str = "q") -> tuple[NDArray[np.float64], bool]:
+    """Joint values ``q`` of shape (dof,) or (N, dof) -> finite float64 (N, dof), and whether a
+    single vector was given. The one check of joint values (robot, reference, singularity, maps):
+    an InputError naming ``field`` unless ``q`` holds finite real numbers of one of those shapes
+    (one line, naming the shape or type given, not every value)."""
+    Q = real_array(q, field, f"finite numbers of shape ({dof},) or (N, {dof})")
+    single = Q.ndim == 1
+    if single:
         Q = Q[None, :]
     if Q.ndim != 2 or Q.shape[1] != dof:
-        raise InputError(field="q", value=np.shape(q), expected=f"shape ({dof},) or (N, {dof})")
+        raise InputError(field=field, value=np.shape(q),
+                         expected=f"shape ({dof},) or (N, {dof})")
     if not np.all(np.isfinite(Q)):
-        raise InputError("q: expected finite joint values, got NaN or inf", field="q",
+        raise InputError(f"{field}: expected finite joint values, got NaN or inf", field=field,
                          expected="finite joint values")
+    return Q, single
+
+
+def joint_vector(q: ArrayLike, dof: int, field: str = "q") -> NDArray[np.float64]:
+    """One joint vector ``q`` -> finite float64 (dof,); InputError naming ``field`` otherwise
+    (the single-configuration twin of :func:`joint_batch`)."""
+    expected = f"{dof} finite joint values (shape ({dof},))"
+    Q = real_array(q, field, expected)
+    if Q.shape != (dof,):
+        raise InputError(f"{field}: expected {expected}, got shape {Q.shape}", field=field,
+                         value=Q.shape, expected=expected)
+    if not np.all(np.isfinite(Q)):
+        raise InputError(f"{field}: expected {expected}, got {Q.tolist()!r}", field=field,
+                         value=Q.tolist(), expected=expected)
     return Q
+
+
+def real_array(q: ArrayLike, field: str, expected: str) -> NDArray[np.float64]:
+    """``q`` as a float64 array of any shape; InputError ("``field``: expected ``expected``, got
+    ...") unless its values are real numbers of a kind in :data:`JOINT_VALUE_KINDS` (text, bool,
+    complex, None, ragged lists are refused). Shape and finiteness are the caller's to check."""
+    if isinstance(q, (str, bytes)):
+        raise InputError(f"{field}: expected {expected}, got text {str(q)[:40]!r}", field=field,
+                         value=type(q).__name__, expected=expected)
+    try:
+        raw = np.asarray(q)
+        if raw.dtype.kind not in JOINT_VALUE_KINDS:
+            raise TypeError(f"values of type {raw.dtype}")
+        if raw.dtype.kind == "O" and any(value is None for value in raw.flat):
+            raise TypeError("None among the values")  # numpy would read None as NaN
+        return raw.astype(np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        what = " ".join(str(exc).split())[:100]
+        raise InputError(f"{field}: expected {expected}, got {what}", field=field,
+                         value=type(q).__name__, expected=expected) from exc

@@ -14,6 +14,9 @@ class says *whose* fault it is, whatever the entry point:
 :class:`UnreachableError`   what was asked does not exist for this robot: a singularity
                             its joint cannot reach within the limits, a path pose with no
                             IK solution
+:class:`FileWriteError`     the system refused to write an output file (no space left, a
+                            file size limit, no permission, a read-only file system); the
+                            old file is left as it was
 ==========================  ==============================================================
 
 Each error carries the parts of its message as attributes, None where they do not apply:
@@ -39,11 +42,20 @@ class DhkinError(Exception):
                  index: int | None = None) -> None:
         if message is None:
             message = describe(field, value, expected, index)
-        super().__init__(message)
+        super().__init__(one_line(message))
         self.field = field
         self.value = value
         self.expected = expected
         self.index = index
+
+
+def one_line(message: str) -> str:
+    """``message`` on one line: text quoted from elsewhere (a parser's, Pinocchio's, xacro's
+    multi-line report) has its line breaks and their indentation turned into single spaces, so
+    every dhkin error prints as one line (a log line, the CLI's ``dhkin: error: ...``)."""
+    if "\n" not in message and "\r" not in message:
+        return message
+    return " ".join(part.strip() for part in message.splitlines() if part.strip())
 
 
 def describe(field: str | None, value: Any, expected: str | None,
@@ -82,12 +94,24 @@ class UnreachableError(DhkinError, ValueError):
     pose without an IK solution)."""
 
 
+class FileWriteError(DhkinError, OSError):
+    """The system refused to write an output file: no space left on device, a file size limit,
+    no permission, a read-only file system. The message names the file and the system's reason;
+    ``errno``, ``strerror`` and ``filename`` are those of the system's error. An OSError too, as
+    the plain writes it replaces raised. (A destination that is wrong as given, such as an
+    existing file without force or a symbolic link, is an :class:`InputError`.)"""
+
+    def __str__(self) -> str:
+        # dhkin's one-line message, not OSError's "[Errno N] reason: 'file'" built from errno
+        return str(self.args[0]) if self.args else ""
+
+
 #: Earlier names of :class:`InputError` (see the module docstring).
 IKInputError = InputError
 SingularityError = InputError
 ValidationInputError = InputError
 
 #: Every error class, for ``from dhkin.errors import *`` users and for the package's exports.
-__all__ = ["DHError", "DhkinError", "FamilyError", "IKInputError", "InputError",
-           "RobotNotFoundError", "SingularityError", "URDFError", "UnreachableError",
-           "ValidationInputError", "describe"]
+__all__ = ["DHError", "DhkinError", "FamilyError", "FileWriteError", "IKInputError",
+           "InputError", "RobotNotFoundError", "SingularityError", "URDFError",
+           "UnreachableError", "ValidationInputError", "describe", "one_line"]

@@ -42,6 +42,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.description import read_urdf_file
 from dhkin.dh import DHTable, Joint
 from dhkin.errors import DHError, URDFError
 from dhkin.reference import Reference
@@ -296,10 +297,7 @@ def _urdf_text(urdf: str | Path) -> tuple[str, str]:
     if isinstance(urdf, str) and urdf.lstrip().startswith("<"):
         return urdf, "<urdf>"
     path = Path(urdf)
-    try:
-        return path.read_text(encoding="utf-8"), str(path)
-    except OSError as exc:
-        raise URDFError(f"{path}: cannot read URDF ({exc.strerror})") from exc
+    return read_urdf_file(path), str(path)
 
 
 def _check_matching_chain(table: DHTable, chain: URDFChain) -> None:

@@ -42,7 +42,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from dhkin.axes_to_dh import CLEAN, AxisRows, rows_from_axes
@@ -62,7 +61,7 @@ from dhkin.table_file import (
     LENGTH_UNITS,
     UNITS_RULE,
     exact_rpy,
-    parse_table,
+    read_back,
     table_to_yaml,
     units_problem,
 )
@@ -159,8 +158,7 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
         table = _corrected(table, chain)
     table = _clean(table, units)
     table = replace(table, source=_source(description, base, tip, notes))
-    written = parse_table(yaml.safe_load(table_to_yaml(table, units)),
-                          source=description.source)
+    written = read_back(table_to_yaml(table, units), source=description.source)
     deviation = chain_deviation(written, chain, VERIFY_SAMPLES)
     if max(deviation) > DEFAULT_TOLERANCE:
         raise DHError(f"{description.source}: the imported table deviates from the description "

@@ -46,8 +46,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin.dh import DHTable
-from dhkin.errors import FamilyError, InputError
+from dhkin.dh import DHTable, joint_batch
+from dhkin.errors import FamilyError
 from dhkin.ik.geometry import (
     Condition,
     JointAxis,
@@ -152,16 +152,7 @@ def opw_fk(params: OPWParameters, q: ArrayLike) -> Matrix:
 
 def _joint_batch(q: ArrayLike) -> tuple[Matrix, bool]:
     """q as a finite (N, 6) float array, and whether one vector was given; InputError otherwise."""
-    Q = np.asarray(q, dtype=float)
-    single = Q.ndim == 1
-    if single:
-        Q = Q[None, :]
-    if Q.ndim != 2 or Q.shape[1] != 6:
-        raise InputError(field="q", value=np.shape(q), expected="shape (6,) or (N, 6)")
-    if not np.all(np.isfinite(Q)):
-        raise InputError("q: expected finite joint values, got NaN or inf", field="q",
-                         expected="finite joint values")
-    return Q, single
+    return joint_batch(q, 6)
 
 
 def _turn(axis: str, angle: NDArray[np.float64]) -> Matrix:
@@ -231,9 +222,9 @@ def _family_error(table: DHTable, found: list[str]) -> FamilyError:
     where = str(table.path) if table.path is not None else table.name
     hint = ""
     if table.corrected and not opw_problems(table.nominal()):
-        hint = "\n  (its nominal table, without the corrections, is an OPW arm)"
-    return FamilyError(f"{where}: not an OPW arm (no opw_kinematics parameters):\n  "
-                       + "\n  ".join(found) + hint, field="opw", value=found, expected=EXPECTED)
+        hint = " (its nominal table, without the corrections, is an OPW arm)"
+    return FamilyError(f"{where}: not an OPW arm (no opw_kinematics parameters): "
+                       + "; ".join(found) + hint, field="opw", value=found, expected=EXPECTED)
 
 
 # --------------------------------------------------------------------------------------------

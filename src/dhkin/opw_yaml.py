@@ -13,6 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from dhkin.dh import DHTable
+from dhkin.files import output_folder, write_file
 from dhkin.opw import Matrix, OPWParameters, opw_parameters
 from dhkin.transforms import matrix_to_rpy
 
@@ -60,16 +61,14 @@ def opw_yaml(params: OPWParameters, group: str | None = None) -> str:
     return "\n".join(lines + body) + "\n"
 
 
-def export_opw(table: DHTable, directory: str | Path) -> Path:
+def export_opw(table: DHTable, directory: str | Path, force: bool = False) -> Path:
     """Write ``<name>_opw.yaml`` (:func:`opw_yaml` of :func:`opw_parameters`) into
     ``directory`` (created if needed); the path written. FamilyError for a table that is not an
-    OPW arm (nothing is written then)."""
+    OPW arm (nothing is written then). Written as :mod:`dhkin.files` says: an existing file with
+    other content only with ``force``, never through a symbolic link."""
     text = opw_yaml(opw_parameters(table))
-    folder = Path(directory)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{table.name}_opw.yaml"
-    path.write_text(text, encoding="utf-8")
-    return path
+    with output_folder(directory) as folder:
+        return write_file(folder / f"{table.name}_opw.yaml", text, force=force)
 
 
 def _number(value: float) -> str:

@@ -15,6 +15,11 @@ root link, which Pinocchio calls the universe).
 
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Literal
 
@@ -22,6 +27,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.description import UrdfOutline, outline_urdf
+from dhkin.dh import joint_batch, joint_vector
 from dhkin.errors import InputError, URDFError
 
 ReferenceFrameName = Literal["local", "world", "local_world_aligned"]
@@ -91,10 +98,22 @@ class Reference:
 
     def __init__(self, urdf_text: str, tip: str = "tool0", base: str | None = None,
                  source: str = "<urdf>") -> None:
-        try:
-            self.model = pin.buildModelFromXML(urdf_text)
-        except Exception as exc:
-            raise URDFError(f"{source}: Pinocchio cannot build a model ({exc})") from exc
+        if not isinstance(urdf_text, str):
+            raise InputError(f"urdf_text: expected the URDF as text (str), got "
+                             f"{type(urdf_text).__name__}", field="urdf_text",
+                             value=type(urdf_text).__name__, expected="str")
+        #: The links and joints as written (checked to form one tree before Pinocchio reads it).
+        self.outline: UrdfOutline = outline_urdf(urdf_text, source)
+        with _captured_stderr() as urdfdom_report:
+            try:
+                self.model = pin.buildModelFromXML(urdf_text)
+            except Exception as exc:
+                failure: Exception | None = exc
+            else:
+                failure = None
+        if failure is not None:
+            raise URDFError(f"{source}: Pinocchio cannot build a model "
+                            f"({_urdfdom_cause(urdfdom_report) or failure})") from failure
         self.data = self.model.createData()
         self.source = source
         self.tip = tip
@@ -131,7 +150,11 @@ class Reference:
         return properties
 
     def frame_id(self, name: str) -> int:
-        """Pinocchio frame index of ``name``; URDFError listing the frames if it does not exist."""
+        """Pinocchio frame index of ``name``; URDFError listing the frames if it does not exist
+        (InputError if ``name`` is not a string)."""
+        if not isinstance(name, str):
+            raise InputError(f"frame: expected a frame name (str), got {name!r}", field="frame",
+                             value=name, expected="a frame name")
         if not self.model.existFrame(name):
             names = sorted({f.name for f in self.model.frames})
             raise URDFError(f"{self.source}: no frame named {name!r}; expected one of {names}")
@@ -155,11 +178,9 @@ class Reference:
         return chain[::-1]
 
     def configuration(self, q: ArrayLike) -> NDArray[np.float64]:
-        """Chain-order joint vector (dof,) -> Pinocchio configuration (nq,)."""
-        values = np.asarray(q, dtype=float)
-        if values.shape != (self.dof,):
-            raise URDFError(f"{self.source}: expected {self.dof} joint values for the chain "
-                            f"{self.joint_names}, got shape {values.shape}")
+        """Chain-order joint vector (dof,) -> Pinocchio configuration (nq,); InputError unless
+        ``q`` is ``dof`` finite numbers."""
+        values = joint_vector(q, self.dof)
         if self._direct:
             return values
         config = pin.neutral(self.model)
@@ -173,13 +194,7 @@ class Reference:
     def fk(self, q: ArrayLike, frame: str | None = None) -> NDArray[np.float64]:
         """Pose base -> ``frame`` (default: tip). q: (dof,) -> (4, 4); (N, dof) -> (N, 4, 4)."""
         frame_id = self._tip_id if frame is None else self.frame_id(frame)
-        Q = np.asarray(q, dtype=float)
-        single = Q.ndim == 1
-        Q = np.atleast_2d(Q)
-        if Q.ndim != 2 or Q.shape[1] != self.dof:
-            raise InputError(f"q ({self.source}): expected {self.dof} joint values for the "
-                             f"chain {self.joint_names}, got shape {np.shape(q)}", field="q",
-                             value=np.shape(q), expected=f"{self.dof} joint values")
+        Q, single = joint_batch(q, self.dof)
         out = np.empty((Q.shape[0], 4, 4))
         model, data = self.model, self.data
         for k, row in enumerate(Q):
@@ -207,13 +222,16 @@ class Reference:
         The "world" is the ``base`` frame when one was given (the frame :meth:`fk` poses are
         relative to), else the root link.
         """
-        if reference not in REFERENCE_FRAMES:
-            raise URDFError(f"reference: expected one of {list(REFERENCE_FRAMES)}, "
-                            f"got {reference!r}")
+        if not isinstance(reference, str) or reference not in REFERENCE_FRAMES:
+            raise InputError(f"reference: expected one of {list(REFERENCE_FRAMES)}, "
+                             f"got {reference!r}", field="reference", value=reference,
+                             expected=f"one of {list(REFERENCE_FRAMES)}")
         frame_id = self._tip_id if frame is None else self.frame_id(frame)
-        config = self.configuration(np.asarray(q, dtype=float))
-        J = pin.computeFrameJacobian(self.model, self.data, config, frame_id,
-                                     REFERENCE_FRAMES[reference])[:, self._idx_v]
+        config = self.configuration(q)
+        # Pinocchio hands a one-column Jacobian (nv = 1) back as a vector: keep it 6 x nv.
+        J = np.reshape(pin.computeFrameJacobian(self.model, self.data, config, frame_id,
+                                                REFERENCE_FRAMES[reference]),
+                       (6, self.model.nv))[:, self._idx_v]
         if self._base_id is None or reference == "local":
             return J
         # Pinocchio's world is the root link: re-express in the base frame, like fk's poses.
@@ -236,6 +254,44 @@ class Reference:
             sigma_min=sigma_min,
             condition=float(sigma[0] / sigma_min) if sigma_min > 0 else float("inf"),
         )
+
+
+class _Report:
+    """Text captured by :func:`_captured_stderr` (filled when the block ends)."""
+
+    text = ""
+
+
+@contextmanager
+def _captured_stderr() -> Iterator[_Report]:
+    """Capture what C++ code writes to file descriptor 2 during the block. urdfdom, which
+    Pinocchio parses URDFs with, writes the cause of a failure there ("Joint [j] is of type
+    REVOLUTE but it does not specify limits") and raises only "The XML stream does not contain
+    a valid URDF model". Without a usable descriptor 2 the block runs uncaptured."""
+    report = _Report()
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield report
+        return
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield report
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            capture.seek(0)
+            report.text = capture.read(65536).decode("utf-8", errors="replace")
+
+
+def _urdfdom_cause(report: _Report) -> str | None:
+    """urdfdom's first "Error:" line (the cause), or None."""
+    for line in report.text.splitlines():
+        if line.strip().startswith("Error:"):
+            return line.strip().removeprefix("Error:").strip()
+    return None
 
 
 def _yoshikawa(J: NDArray[np.float64]) -> float:

@@ -1,15 +1,19 @@
 """DH table files: parsing and validation of the YAML format (every value checked; a DHError names
 the file, the field and what was expected), and writing a table back, exactly or in chosen units.
-The table itself and its FK: :mod:`dhkin.dh`.
+The table itself and its FK: :mod:`dhkin.dh`; reading the YAML, and its limits:
+:mod:`dhkin.table_yaml`.
+
+An optional key given without a value (YAML null, e.g. ``flange:`` left empty) means the same as
+leaving it out: its documented default. Limits on the table itself (joints, joint ranges,
+lengths) are those of :mod:`dhkin.dh`, reported here in the file's units.
 """
 
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import yaml
@@ -20,16 +24,35 @@ from dhkin.dh import (
     CONVENTIONS,
     JOINT_TYPES,
     LENGTH_UNITS,
+    MAX_JOINT_TURNS,
+    MAX_JOINTS,
     NO_CORRECTION,
     RESERVED_LINK_NAMES,
+    Convention,
     DHTable,
     Joint,
+    JointType,
     _default_flange,
     fixed_joint_names,
 )
 from dhkin.errors import DHError
+from dhkin.files import write_file
+from dhkin.table_values import (
+    Units,
+    Where,
+    angle_value,
+    check_keys,
+    check_unique,
+    given,
+    length_value,
+    name_value,
+    number_value,
+    text_value,
+    units_value,
+    vector3,
+)
+from dhkin.table_yaml import load_yaml, read_table_text, shown
 from dhkin.transforms import rot_y, rot_z, xyz_rpy_to_matrix
-from dhkin.xml_text import NAME_RULE, name_problem, text_problem
 
 _TOP_KEYS_REQUIRED = ("name", "convention", "units", "joints")
 
@@ -45,48 +68,48 @@ _FRAME_KEYS = ("xyz", "rpy")
 
 
 def load_table(path: str | Path) -> DHTable:
-    """Read and validate a DH table file (YAML). Raises :class:`DHError` naming file and field."""
+    """Read and validate a DH table file (YAML 1.2, :mod:`dhkin.table_yaml`). Raises
+    :class:`DHError` naming the file and the field."""
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise DHError(f"{file}: cannot read DH table file ({exc.strerror})") from exc
-    try:
-        data = yaml.load(text, Loader=_UniqueKeyLoader)  # SafeLoader that rejects duplicates
-    except _DuplicateKeyError as exc:
-        raise DHError(f"{file}: {exc.key}: given twice in one mapping (lines {exc.first_line} "
-                      f"and {exc.line}); expected each key once") from exc
-    except yaml.YAMLError as exc:
-        raise DHError(f"{file}: not valid YAML ({exc})") from exc
+    data = load_yaml(read_table_text(file), source=str(file))
     return parse_table(data, source=str(file), path=file)
+
+
+def read_back(text: str, source: str = "<table>") -> DHTable:
+    """The table that :func:`load_table` would read from a file holding ``text``."""
+    return parse_table(load_yaml(text, source), source=source)
 
 
 def parse_table(data: Any, source: str = "<table>", path: Path | None = None) -> DHTable:
     """Validate a table given as a mapping (the parsed YAML) and convert it to SI units."""
-    where = _Where(source)
+    where = Where(source)
     if not isinstance(data, Mapping):
-        raise DHError(f"{source}: expected a mapping with keys {_TOP_KEYS_REQUIRED}, "
-                      f"got {type(data).__name__}")
-    _check_keys(data, _TOP_KEYS_REQUIRED, _TOP_KEYS_OPTIONAL, where, "")
+        got = "an empty file" if data is None else type(data).__name__
+        raise DHError(f"{source}: expected a mapping with keys {_TOP_KEYS_REQUIRED}, got {got}",
+                      field="file", value=got, expected=f"a mapping with keys {_TOP_KEYS_REQUIRED}")
+    data = given(data, _TOP_KEYS_OPTIONAL)
+    check_keys(data, _TOP_KEYS_REQUIRED, _TOP_KEYS_OPTIONAL, where, "")
 
-    name = _name(data["name"], where, "name", macro=True)
+    name = name_value(data["name"], where, "name", macro=True)
     convention = data["convention"]
-    if convention not in CONVENTIONS:
-        raise DHError(where.msg("convention", f"expected one of {list(CONVENTIONS)}, "
-                                              f"got {convention!r}"))
-    length_scale, angle_scale = _units(data["units"], where)
+    if not isinstance(convention, str) or convention not in CONVENTIONS:
+        raise where.error("convention", convention, f"one of {list(CONVENTIONS)}")
+    units = units_value(data["units"], where)
 
     joints_data = data["joints"]
     if not isinstance(joints_data, Sequence) or isinstance(joints_data, str):
-        raise DHError(where.msg("joints", "expected a list of joint entries, "
-                                          f"got {type(joints_data).__name__}"))
+        raise where.error("joints", type(joints_data).__name__, "a list of joint entries",
+                          f"expected a list of joint entries, got {type(joints_data).__name__}")
     if len(joints_data) == 0:
-        raise DHError(where.msg("joints", "expected at least one joint, got an empty list"))
-    joints = tuple(
-        _joint(entry, i, where, length_scale, angle_scale) for i, entry in enumerate(joints_data)
-    )
-    _check_unique([j.name for j in joints], where, "name")
-    _check_unique([j.link for j in joints], where, "link")
+        raise where.error("joints", [], "at least one joint",
+                          "expected at least one joint, got an empty list")
+    if len(joints_data) > MAX_JOINTS:
+        raise where.error("joints", len(joints_data), f"at most {MAX_JOINTS} joints",
+                          f"expected at most {MAX_JOINTS} joints (dhkin.dh.MAX_JOINTS: an arm), "
+                          f"got {len(joints_data)}")
+    joints = tuple(_joint(entry, i, where, units) for i, entry in enumerate(joints_data))
+    check_unique([j.name for j in joints], where, "name")
+    check_unique([j.link for j in joints], where, "link")
     fixed = fixed_joint_names(joints[-1].link)
     for i, joint in enumerate(joints):
         if joint.name in fixed:
@@ -94,229 +117,119 @@ def parse_table(data: Any, source: str = "<table>", path: Path | None = None) ->
                               f"a name other than those of the generated fixed joints "
                               f"{list(fixed)}")
 
-    base = _frame(data.get("base"), where, "base", length_scale, angle_scale)
-    tool = _frame(data.get("tool"), where, "tool", length_scale, angle_scale)
-    flange = (_frame(data["flange"], where, "flange", length_scale, angle_scale)
+    base = _frame(data.get("base"), where, "base", units)
+    tool = _frame(data.get("tool"), where, "tool", units)
+    flange = (_frame(data["flange"], where, "flange", units)
               if "flange" in data else _default_flange())
-    description = _text(data.get("description", ""), where, "description")
-    source_text = _text(data.get("source", ""), where, "source")
-    return DHTable(name=name, convention=convention, joints=joints, base=base, tool=tool,
-                   flange=flange, description=description, source=source_text, path=path)
+    description = text_value(data.get("description", ""), where, "description")
+    source_text = text_value(data.get("source", ""), where, "source")
+    try:
+        return DHTable(name=name, convention=cast(Convention, convention), joints=joints,
+                       base=base, tool=tool, flange=flange, description=description,
+                       source=source_text, path=path)
+    except DHError as exc:  # a limit of dhkin.dh the checks above missed: name the file too
+        raise DHError(f"{source}: {exc}", field=exc.field, value=exc.value,
+                      expected=exc.expected) from exc
 
 
-class _DuplicateKeyError(yaml.YAMLError):
-    """A key that appears twice in one YAML mapping (PyYAML would silently keep the last)."""
-
-    def __init__(self, key: Any, first_line: int, line: int) -> None:
-        super().__init__(f"duplicate key {key!r}")
-        self.key, self.first_line, self.line = key, first_line, line
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """yaml.SafeLoader that rejects duplicate keys instead of keeping the last value."""
-
-
-def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode,
-                              deep: bool = False) -> dict[Any, Any]:
-    first_lines: dict[Any, int] = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=True)
-        line = key_node.start_mark.line + 1
-        try:
-            if key in first_lines:
-                raise _DuplicateKeyError(key, first_lines[key], line)
-            first_lines[key] = line
-        except TypeError:  # unhashable key (a list or mapping): PyYAML reports it below
-            continue
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
-                                 _construct_unique_mapping)
-
-
-class _Where:
-    """Formats error messages as '<file>: <field>: <what was expected>'."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def msg(self, field_name: str, expected: str) -> str:
-        return f"{self.source}: {field_name}: {expected}"
-
-    def error(self, field_name: str, value: Any, expected: str,
-              problem: str | None = None) -> DHError:
-        """DHError '<file>: <field>: <problem>' (default 'expected <expected>, got <value>')
-        carrying field, value and expected."""
-        text = problem if problem is not None else f"expected {expected}, got {value!r}"
-        return DHError(self.msg(field_name, text), field=field_name, value=value,
-                       expected=expected)
-
-
-def _check_keys(data: Mapping[str, Any], required: Sequence[str], optional: Sequence[str],
-                where: _Where, prefix: str) -> None:
-    allowed = list(required) + list(optional)
-    for key in data:
-        if key not in allowed:
-            raise DHError(where.msg(f"{prefix}{key}", f"unknown key; expected one of {allowed}"))
-    for key in required:
-        if key not in data:
-            raise DHError(where.msg(f"{prefix}{key}", "missing required key"))
-
-
-def _number(value: Any, where: _Where, field_name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DHError(where.msg(field_name, f"expected a finite number, got {value!r}"))
-    if not math.isfinite(value):
-        raise DHError(where.msg(field_name, f"expected a finite number, got {value!r}"))
-    return float(value)
-
-
-def _text(value: Any, where: _Where, field_name: str) -> str:
-    """Free text (description, source): any string XML can hold exactly (dhkin.xml_text)."""
-    problem = text_problem(value)
-    if problem is not None:
-        raise where.error(field_name, value, "text without control characters other than tab "
-                                             "and line feed", problem)
-    return str(value)
-
-
-def _name(value: Any, where: _Where, field_name: str, macro: bool = False) -> str:
-    """A robot, joint or link name (dhkin.xml_text.NAME_RULE); ``macro``: the robot's name, which
-    also names the xacro macro and so may not be one of xacro's directives."""
-    problem = name_problem(value, macro=macro)
-    if problem is not None:
-        raise where.error(field_name, value, NAME_RULE, problem)
-    return str(value)
-
-
-def _units(value: Any, where: _Where) -> tuple[float, float]:
+def _xyz_rpy(value: Any, where: Where, field_name: str,
+             units: Units) -> tuple[list[float], list[float]]:
+    """``{xyz: [x, y, z], rpy: [r, p, y]}`` (each optional, default zero; rpy within +-1 turn)
+    -> xyz in m, rpy in rad."""
     if not isinstance(value, Mapping):
-        raise DHError(where.msg("units", "expected a mapping {length: m|mm, angle: deg|rad}, "
-                                         f"got {value!r}"))
-    _check_keys(value, ("length", "angle"), (), where, "units.")
-    length, angle = value["length"], value["angle"]
-    if length not in LENGTH_UNITS:
-        raise DHError(where.msg("units.length", f"expected one of {list(LENGTH_UNITS)}, "
-                                                f"got {length!r}"))
-    if angle not in ANGLE_UNITS:
-        raise DHError(where.msg("units.angle", f"expected one of {list(ANGLE_UNITS)}, "
-                                               f"got {angle!r}"))
-    return LENGTH_UNITS[length], ANGLE_UNITS[angle]
+        raise where.error(field_name, value, "a mapping {xyz: [x, y, z], rpy: [r, p, y]}")
+    value = given(value, _FRAME_KEYS)
+    check_keys(value, (), _FRAME_KEYS, where, f"{field_name}.")
+    xyz = [length_value(v, where, f"{field_name}.xyz[{k}]", units)
+           for k, v in enumerate(vector3(value.get("xyz", [0, 0, 0]), where,
+                                          f"{field_name}.xyz"))]
+    rpy = [angle_value(v, where, f"{field_name}.rpy[{k}]", units)
+           for k, v in enumerate(vector3(value.get("rpy", [0, 0, 0]), where,
+                                          f"{field_name}.rpy"))]
+    return xyz, rpy
 
 
-def _vector3(value: Any, where: _Where, field_name: str) -> list[float]:
-    if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 3:
-        raise DHError(where.msg(field_name, f"expected a list of 3 numbers, got {value!r}"))
-    return [_number(v, where, f"{field_name}[{k}]") for k, v in enumerate(value)]
-
-
-def _frame(value: Any, where: _Where, field_name: str, length_scale: float,
-           angle_scale: float) -> NDArray[np.float64]:
+def _frame(value: Any, where: Where, field_name: str, units: Units) -> NDArray[np.float64]:
     if value is None:
         return np.eye(4)
-    if not isinstance(value, Mapping):
-        raise DHError(where.msg(field_name, "expected a mapping {xyz: [x, y, z], rpy: [r, p, y]}, "
-                                            f"got {value!r}"))
-    _check_keys(value, (), ("xyz", "rpy"), where, f"{field_name}.")
-    xyz = np.array(_vector3(value.get("xyz", [0, 0, 0]), where, f"{field_name}.xyz"))
-    rpy = np.array(_vector3(value.get("rpy", [0, 0, 0]), where, f"{field_name}.rpy"))
-    return xyz_rpy_to_matrix(xyz * length_scale, rpy * angle_scale)
+    xyz, rpy = _xyz_rpy(value, where, field_name, units)
+    return xyz_rpy_to_matrix(np.array(xyz), np.array(rpy))
 
 
-def _joint(entry: Any, index: int, where: _Where, length_scale: float,
-           angle_scale: float) -> Joint:
+def _joint(entry: Any, index: int, where: Where, units: Units) -> Joint:
     label = f"joints[{index}]"
     if not isinstance(entry, Mapping):
-        raise DHError(where.msg(label, f"expected a mapping of DH values, got {entry!r}"))
-    joint_type = entry.get("type", "revolute")
-    if joint_type not in JOINT_TYPES:
-        raise DHError(where.msg(f"{label}.type", f"expected one of {list(JOINT_TYPES)}, "
-                                                 f"got {joint_type!r}"))
+        raise where.error(label, entry, "a mapping of DH values")
+    joint_type = entry.get("type")
+    joint_type = "revolute" if joint_type is None else joint_type
+    if not isinstance(joint_type, str) or joint_type not in JOINT_TYPES:
+        raise where.error(f"{label}.type", joint_type, f"one of {list(JOINT_TYPES)}")
     revolute = joint_type == "revolute"
     # The joint variable replaces theta (revolute) or d (prismatic): the other one is fixed.
     fixed_key = "d" if revolute else "theta"
     required = ("a", "alpha", "lower", "upper") + (("d",) if revolute else ())
     optional = tuple(k for k in _JOINT_KEYS_COMMON if k not in required)
     optional += () if revolute else ("theta",)
+    entry = given(entry, optional)
     for wrong in (("theta",) if revolute else ("d",)):
         if wrong in entry:
             variable = "theta" if revolute else "d"
-            raise DHError(where.msg(f"{label}.{wrong}",
-                                    f"a {joint_type} joint's {variable} is its joint variable; "
-                                    f"give its constant part as 'offset' and the fixed "
-                                    f"{fixed_key} as '{fixed_key}'"))
-    _check_keys(entry, required, optional, where, f"{label}.")
+            raise where.error(f"{label}.{wrong}", entry[wrong], f"no '{wrong}'",
+                              f"a {joint_type} joint's {variable} is its joint variable; "
+                              f"give its constant part as 'offset' and the fixed "
+                              f"{fixed_key} as '{fixed_key}'")
+    check_keys(entry, required, optional, where, f"{label}.")
 
-    def num(key: str, default: float = 0.0) -> float:
-        return _number(entry.get(key, default), where, f"{label}.{key}")
+    def length(key: str) -> float:
+        return length_value(entry.get(key, 0.0), where, f"{label}.{key}", units)
 
-    variable_scale = angle_scale if revolute else length_scale
-    name = _name(entry.get("name", f"joint_{index + 1}"), where, f"{label}.name")
-    link = _name(entry.get("link", f"link_{index + 1}"), where, f"{label}.link")
+    def angle(key: str) -> float:
+        return angle_value(entry.get(key, 0.0), where, f"{label}.{key}", units)
+
+    def limit(key: str) -> float:
+        if revolute:
+            return angle_value(entry[key], where, f"{label}.{key}", units, turns=MAX_JOINT_TURNS,
+                          what="a joint limit")
+        return length(key)
+
+    name = name_value(entry.get("name", f"joint_{index + 1}"), where, f"{label}.name")
+    link = name_value(entry.get("link", f"link_{index + 1}"), where, f"{label}.link")
     if link in RESERVED_LINK_NAMES:
-        raise DHError(where.msg(f"{label}.link", f"{link!r} is reserved for a fixed frame; "
-                                                 f"expected a name other than "
-                                                 f"{list(RESERVED_LINK_NAMES)}"))
+        raise where.error(f"{label}.link", link, f"a name other than {list(RESERVED_LINK_NAMES)}",
+                          f"{link!r} is reserved for a fixed frame; expected a name other than "
+                          f"{list(RESERVED_LINK_NAMES)}")
     direction = entry.get("direction", 1)
-    if isinstance(direction, bool) or direction not in (1, -1):
-        raise DHError(where.msg(f"{label}.direction", f"expected 1 or -1, got {direction!r}"))
-    lower = num("lower") * variable_scale
-    upper = num("upper") * variable_scale
+    if isinstance(direction, bool) or not isinstance(direction, (int, float)) \
+            or direction not in (1, -1):
+        raise where.error(f"{label}.direction", direction, "1 or -1")
+    lower, upper = limit("lower"), limit("upper")
     if not lower < upper:
-        raise DHError(where.msg(f"{label}.lower", "expected lower < upper, got lower = "
-                                f"{entry['lower']!r}, upper = {entry['upper']!r}"))
-    velocity = num("velocity") * variable_scale
-    effort = num("effort")
+        raise where.error(f"{label}.lower", entry["lower"], "lower < upper",
+                          f"expected lower < upper, got lower = {shown(entry['lower'])}, "
+                          f"upper = {shown(entry['upper'])}")
+    variable_scale = units.angle_scale if revolute else units.length_scale
+    velocity = number_value(entry.get("velocity", 0.0), where, f"{label}.velocity") * variable_scale
+    effort = number_value(entry.get("effort", 0.0), where, f"{label}.effort")
     for key, value in (("velocity", velocity), ("effort", effort)):
         if value < 0:
-            raise DHError(where.msg(f"{label}.{key}", f"expected a value >= 0, got {entry[key]!r}"))
-    for key in ("alpha", "offset" if revolute else "theta"):
-        if abs(num(key) * angle_scale) > 2 * math.pi + 1e-9:
-            unit = "deg" if angle_scale != 1.0 else "rad"
-            raise DHError(where.msg(f"{label}.{key}", f"expected an angle within +-360 deg "
-                                    f"(+-2pi rad), got {entry[key]!r} {unit}; are units.angle "
-                                    f"right?"))
-    correction = (_correction(entry["correction"], where, f"{label}.correction", length_scale,
-                              angle_scale) if "correction" in entry else NO_CORRECTION)
+            raise where.error(f"{label}.{key}", entry[key], "a value >= 0")
+    correction = (_correction(entry["correction"], where, f"{label}.correction", units)
+                  if "correction" in entry else NO_CORRECTION)
     return Joint(
-        name=name, link=link, type=joint_type,
-        a=num("a") * length_scale, alpha=num("alpha") * angle_scale,
-        d=num("d") * length_scale if revolute else 0.0,
-        theta=0.0 if revolute else num("theta") * angle_scale,
-        offset=num("offset") * variable_scale, direction=int(direction),
+        name=name, link=link, type=cast(JointType, joint_type),
+        a=length("a"), alpha=angle("alpha"),
+        d=length("d") if revolute else 0.0,
+        theta=0.0 if revolute else angle("theta"),
+        offset=angle("offset") if revolute else length("offset"), direction=int(direction),
         lower=lower, upper=upper, velocity=velocity, effort=effort, correction=correction,
     )
 
 
-def _correction(value: Any, where: _Where, field_name: str, length_scale: float,
-                angle_scale: float) -> tuple[float, float, float, float, float, float]:
+def _correction(value: Any, where: Where, field_name: str,
+                units: Units) -> tuple[float, float, float, float, float, float]:
     """A joint's ``correction: {xyz: [x, y, z], rpy: [r, p, y]}`` (table units) -> SI 6-tuple."""
-    if not isinstance(value, Mapping):
-        raise DHError(where.msg(field_name, "expected a mapping {xyz: [x, y, z], rpy: [r, p, y]}, "
-                                            f"got {value!r}"))
-    _check_keys(value, (), _FRAME_KEYS, where, f"{field_name}.")
-    xyz = _vector3(value.get("xyz", [0, 0, 0]), where, f"{field_name}.xyz")
-    rpy = _vector3(value.get("rpy", [0, 0, 0]), where, f"{field_name}.rpy")
-    for k, angle in enumerate(rpy):
-        if abs(angle * angle_scale) > 2 * math.pi + 1e-9:
-            unit = "deg" if angle_scale != 1.0 else "rad"
-            raise DHError(where.msg(f"{field_name}.rpy[{k}]", "expected an angle within +-360 deg "
-                                    f"(+-2pi rad), got {value['rpy'][k]!r} {unit}; are "
-                                    "units.angle right?"))
-    x, y, z = (v * length_scale for v in xyz)
-    roll, pitch, yaw = (v * angle_scale for v in rpy)
+    (x, y, z), (roll, pitch, yaw) = _xyz_rpy(value, where, field_name, units)
     return (x, y, z, roll, pitch, yaw)
-
-
-def _check_unique(names: list[str], where: _Where, key: str) -> None:
-    seen: dict[str, int] = {}
-    for i, n in enumerate(names):
-        if n in seen:
-            raise DHError(where.msg(f"joints[{i}].{key}", f"duplicate {key} {n!r} (also "
-                                                          f"joints[{seen[n]}]); expected unique "
-                                                          f"{key}s"))
-        seen[n] = i
 
 
 #: Units :func:`table_to_yaml` writes by default: metres and radians, so that every number
@@ -396,11 +309,11 @@ def table_to_yaml(table: DHTable, units: Mapping[str, str] | None = None,
 
 
 def write_table(table: DHTable, path: str | Path, units: Mapping[str, str] | None = None,
-                header: str | None = None) -> Path:
-    """Write :func:`table_to_yaml` of ``table`` to ``path``; return the path."""
-    file = Path(path)
-    file.write_text(table_to_yaml(table, units, header), encoding="utf-8")
-    return file
+                header: str | None = None, force: bool = False) -> Path:
+    """Write :func:`table_to_yaml` of ``table`` to ``path``; return the path. Written as
+    :mod:`dhkin.files` says: atomically, an existing file with other content only with
+    ``force``, never through a symbolic link."""
+    return write_file(path, table_to_yaml(table, units, header), field="table", force=force)
 
 
 def _yaml_number(value: float) -> str:
@@ -444,18 +357,28 @@ def _scaled_number(value: float, scale: float) -> str:
 
 
 def _yaml_plain(text: str) -> str:
-    """A name as a plain YAML scalar when it reads back as the same text, else quoted."""
-    try:
-        plain = yaml.safe_load(text) == text
-    except yaml.YAMLError:
-        plain = False
-    return text if plain else json.dumps(text)
+    """A name as a plain YAML scalar when it reads back as the same text under YAML 1.2
+    (:mod:`dhkin.table_yaml`, how tables are read) and 1.1 (PyYAML, how many other tools read
+    them), else quoted."""
+    return text if _reads_back({"key": text}, f"key: {text}") else json.dumps(text)
 
 
 def _yaml_pair(key: str, text: str) -> str:
-    """``key: text`` as YAML, folded and quoted by PyYAML as needed."""
-    return yaml.safe_dump({key: text}, width=_WRITE_WIDTH - 8, allow_unicode=True,
+    """``key: text`` as YAML, folded and quoted by PyYAML as needed; double-quoted (JSON) where
+    PyYAML's text would read back differently under YAML 1.2 (``1e3``, ``0o17`` are numbers)."""
+    pair = yaml.safe_dump({key: text}, width=_WRITE_WIDTH - 8, allow_unicode=True,
                           sort_keys=False).rstrip("\n")
+    if _reads_back({key: text}, pair):
+        return pair
+    return f"{key}: {json.dumps(text, ensure_ascii=False)}"
+
+
+def _reads_back(data: dict[str, str], text: str) -> bool:
+    """Whether YAML ``text`` reads back as ``data`` under both YAML 1.2 and PyYAML's 1.1."""
+    try:
+        return load_yaml(text) == data and yaml.safe_load(text) == data
+    except (DHError, yaml.YAMLError):
+        return False
 
 
 def _wrap_flow(items: list[str], first: str, rest: str) -> list[str]:

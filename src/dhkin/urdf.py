@@ -37,7 +37,8 @@ import xacro
 from numpy.typing import NDArray
 
 from dhkin.dh import DHTable, Joint, fixed_joint_names
-from dhkin.errors import DHError, InputError, URDFError
+from dhkin.errors import DHError, FileWriteError, InputError, URDFError
+from dhkin.files import output_folder, write_files
 from dhkin.table_file import exact_rpy
 from dhkin.transforms import (
     invert,
@@ -297,22 +298,26 @@ def generate(table: DHTable, prefix: str = "") -> GeneratedFiles:
                          expected=f"'' or {NAME_RULE}")
     macro, top = macro_xacro(table), top_xacro(table)
     names = (f"{table.name}_macro.xacro", f"{table.name}.urdf.xacro", f"{table.name}.urdf")
-    with tempfile.TemporaryDirectory(prefix="dhkin-xacro-") as tmp:
-        folder = Path(tmp)
-        (folder / names[0]).write_text(macro, encoding="utf-8")
-        (folder / names[1]).write_text(top, encoding="utf-8")
-        urdf = expand_xacro(folder / names[1], prefix=prefix, notes=text_notes(table),
-                            label=table_label(table))
+    try:
+        with tempfile.TemporaryDirectory(prefix="dhkin-xacro-") as tmp:
+            folder = Path(tmp)
+            (folder / names[0]).write_text(macro, encoding="utf-8")
+            (folder / names[1]).write_text(top, encoding="utf-8")
+            urdf = expand_xacro(folder / names[1], prefix=prefix, notes=text_notes(table),
+                                label=table_label(table))
+    except OSError as exc:  # a full temporary folder: one line, not a traceback
+        raise FileWriteError(f"{table_label(table)}: cannot write the xacro files for xacro in "
+                             f"the temporary folder {tempfile.gettempdir()} ({exc.strerror})",
+                             field="temporary folder", value=tempfile.gettempdir(),
+                             expected="a writable temporary folder") from exc
     return GeneratedFiles(names[0], macro, names[1], top, names[2], urdf)
 
 
-def export(table: DHTable, directory: str | Path) -> list[Path]:
-    """Write the three generated files into ``directory`` (created if needed); return the paths."""
-    folder = Path(directory)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name, text in generate(table).as_dict().items():
-        path = folder / name
-        path.write_text(text, encoding="utf-8")
-        written.append(path)
-    return written
+def export(table: DHTable, directory: str | Path, force: bool = False) -> list[Path]:
+    """Write the three generated files into ``directory`` (created with its missing parents);
+    return the paths. Generated first, then written all or none (:mod:`dhkin.files`): an
+    existing file with other content is replaced only with ``force``, an identical one is left
+    alone, a symbolic link is refused, and a failed export removes the folders it created."""
+    files = generate(table).as_dict()
+    with output_folder(directory) as folder:
+        return write_files({folder / name: text for name, text in files.items()}, force=force)

@@ -39,12 +39,18 @@ def check_urdf_executable() -> Path:
 
 
 def run_check_urdf(urdf_file: str | Path) -> Verdict:
-    """Run urdfdom's ``check_urdf`` on a file; ok when it exits 0."""
+    """Run urdfdom's ``check_urdf`` on a file; ok when it exits 0. A failure's detail is
+    urdfdom's first "Error:" line (the cause; its last line only says "Model Parsing the xml
+    failed")."""
     result = subprocess.run([str(check_urdf_executable()), str(urdf_file)], capture_output=True,
-                            text=True, check=False)
-    output = (result.stdout + result.stderr).strip()
+                            text=True, errors="replace", check=False)
+    output = (result.stdout + "\n" + result.stderr).strip()
     if result.returncode != 0:
-        return Verdict("check_urdf", False, output.splitlines()[-1] if output else "failed")
+        lines = [line.strip() for line in output.splitlines() if line.strip()]
+        causes = [line.removeprefix("Error:").strip() for line in lines
+                  if line.startswith("Error:")]
+        return Verdict("check_urdf", False,
+                       causes[0] if causes else (lines[-1] if lines else "failed"))
     return Verdict("check_urdf", True, "Successfully parsed")
 
 

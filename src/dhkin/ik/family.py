@@ -158,6 +158,6 @@ def fit_family(table: DHTable, family: str | None = None) -> FamilyFit:
         deviation_of_model = model_deviation(table, ideal) if refine else (0.0, 0.0)
         return FamilyFit(name, ideal, refine, deviation(conditions), deviation_of_model,
                          FAMILIES[name].build(ideal))
-    raise FamilyError(f"{table.name}: no closed-form IK family fits this table:\n  "
-                      + "\n  ".join(report), field="family", value=problems_of,
+    raise FamilyError(f"{table.name}: no closed-form IK family fits this table: "
+                      + " | ".join(report), field="family", value=problems_of,
                       expected="a table within the band of one of " + ", ".join(FAMILIES))

@@ -22,11 +22,22 @@ def check_tolerance(tolerance: Any) -> float:
                                                                  np.integer)):
         raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
                          f"{tolerance!r}", field="tolerance")
-    value = float(tolerance)
+    try:
+        value = float(tolerance)
+    except OverflowError:  # an int beyond any float
+        value = math.inf
     if not (math.isfinite(value) and value > 0.0):
         raise InputError(f"tolerance: expected a positive finite number (m and rad), got "
                          f"{tolerance!r}", field="tolerance")
     return value
+
+
+def check_flag(value: Any, field: str) -> bool:
+    """``value`` as a bool; InputError unless it is one (a string such as "no" would read as
+    True)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(field=field, value=value, expected="True or False")
+    return bool(value)
 
 
 def as_targets(T: ArrayLike) -> tuple[NDArray[np.float64], bool]:
@@ -74,8 +85,17 @@ def turns_of(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.int64]:
     return np.where(revolute, np.round(q / TWO_PI), 0).astype(np.int64)
 
 
+def check_integer(value: Any, field: str, minimum: int = 0) -> int:
+    """``value`` as an int; InputError naming ``field`` unless it is an integer (not a bool,
+    not a float such as 2.5 or 1e3) of at least ``minimum``: counts (``minimum`` 1), random
+    seeds (0: numpy refuses negative seeds)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+            or value < minimum:
+        expected = {0: "a non-negative integer", 1: "a positive integer"}.get(
+            minimum, f"an integer >= {minimum}")
+        raise InputError(field=field, value=value, expected=expected)
+    return int(value)
+
+
 def _check_chunk(chunk_size: Any) -> int:
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
-            or chunk_size < 1:
-        raise InputError(field="chunk_size", value=chunk_size, expected="a positive integer")
-    return int(chunk_size)
+    return check_integer(chunk_size, "chunk_size", 1)

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.dh import joint_vector
 from dhkin.errors import InputError
 
 #: Singularity flags, stored as bits so that batches keep them in one uint8 array.
@@ -93,10 +94,7 @@ class IKSolutions:
         joint motion: a joint that may cross +-pi has a copy on the other side of the seam.
         Raises IKInputError when there is no solution.
         """
-        current = np.asarray(q_now, dtype=float)
-        if current.shape != (self.q.shape[1],):
-            raise InputError(field="q_now", value=current.shape,
-                             expected=f"shape ({self.q.shape[1]},)")
+        current = joint_vector(q_now, self.q.shape[1], "q_now")
         if len(self) == 0:
             raise InputError(f"no solution to choose from: {self.reason}")
         return self.q[int(np.argmin(np.linalg.norm(self.q - current, axis=1)))].copy()

@@ -26,7 +26,14 @@ from numpy.typing import ArrayLike, NDArray
 from dhkin.dh import DHTable
 from dhkin.errors import InputError
 from dhkin.ik.family import FamilyFit
-from dhkin.ik.inputs import TWO_PI, _check_chunk, as_targets, check_tolerance, pose_error_message
+from dhkin.ik.inputs import (
+    TWO_PI,
+    _check_chunk,
+    as_targets,
+    check_flag,
+    check_tolerance,
+    pose_error_message,
+)
 from dhkin.ik.plan import _kernels, plan_array
 from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions, flag_names
 from dhkin.ik.workers import _in_slices, check_workers
@@ -85,7 +92,9 @@ class ClosedFormSolver:
         spans = table.upper - table.lower
         revolute = np.array([j.is_revolute for j in table.joints])
         copies = np.where(revolute, np.floor(spans / TWO_PI) + 2, 1).astype(np.int64)
-        #: Most solutions one pose can have with every copy.
+        #: Most solutions one pose can have with every copy: a revolute joint has at most
+        #: 2 * MAX_JOINT_TURNS + 2 = 6 copies, since every DHTable keeps its limits within
+        #: +-dhkin.dh.MAX_JOINT_TURNS turns (what bounds the buffers sized by this number).
         self.max_solutions = int(self.n_branches * np.prod(copies))
 
     def __repr__(self) -> str:
@@ -147,6 +156,7 @@ class ClosedFormSolver:
                   copies: bool = False) -> IKSolutions:
         """Every branch's solution of one pose (4, 4) (see the module docstring)."""
         tolerance = check_tolerance(tolerance)
+        copies = check_flag(copies, "copies")
         try:
             target = np.ascontiguousarray(T, dtype=np.float64)
         except (TypeError, ValueError) as exc:
@@ -160,7 +170,7 @@ class ClosedFormSolver:
         except AttributeError:
             buffers = self._one_buffers()
         out_q, out_branch, out_flags, out_errors, why, info, fwork, bwork, uwork, iwork = buffers
-        arguments = (self.plan, frames, target, seed, tolerance, bool(copies), out_q, out_branch,
+        arguments = (self.plan, frames, target, seed, tolerance, copies, out_q, out_branch,
                      out_flags, out_errors, why, info, fwork, bwork, uwork, iwork)
         count = self._one_kernel(*arguments)
         if count == _DEFER:
@@ -286,7 +296,7 @@ class ClosedFormSolver:
         targets, _ = as_targets(T)
         seeds = self._seeds(q_seed, targets.shape[0])
         frames = self.frames if tcp is None else self.frames_for(tcp)
-        return self._batch(targets, seeds, tolerance, frames, bool(copies),
+        return self._batch(targets, seeds, tolerance, frames, check_flag(copies, "copies"),
                            _check_chunk(chunk_size), 0, workers)
 
     def _batch(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
@@ -437,6 +447,7 @@ class ClosedFormSolver:
         """:meth:`solve_batch` chunk by chunk: yields (index of the chunk's first pose, IKBatch
         of its poses). The default chunk holds at most :data:`STREAM_BYTES` of output."""
         tolerance = check_tolerance(tolerance)
+        copies = check_flag(copies, "copies")
         targets, _ = as_targets(T)
         frames = self.frames if tcp is None else self.frames_for(tcp)
         if chunk_size is None:
@@ -447,5 +458,5 @@ class ClosedFormSolver:
         for start in range(0, targets.shape[0], chunk_size):
             stop = min(start + chunk_size, targets.shape[0])
             part = seeds if seeds.shape[0] == 1 else seeds[start:stop]
-            yield start, self._batch(targets[start:stop], part, tolerance, frames, bool(copies),
+            yield start, self._batch(targets[start:stop], part, tolerance, frames, copies,
                                      chunk_size, start)

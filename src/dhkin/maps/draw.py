@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import io
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -14,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from dhkin.errors import InputError
+from dhkin.files import check_output, write_file
 from dhkin.maps.branches import (
     AXIS_NAMES,
     DEFAULT_JOINT_RESOLUTION,
@@ -60,9 +62,12 @@ class SingularityMaps:
 def draw_maps(robot: Arm, output: str | Path, plane: str = "xz", offset: float = 0.0,
               rpy: Sequence[float] | None = None, resolution: int = DEFAULT_RESOLUTION,
               joint_resolution: int = DEFAULT_JOINT_RESOLUTION,
-              q_fixed: ArrayLike | None = None, progress: bool = False) -> SingularityMaps:
+              q_fixed: ArrayLike | None = None, progress: bool = False,
+              force: bool = False) -> SingularityMaps:
     """Compute a workspace slice and the q2-q3 and q3-q5 joint slices; write them as one PNG
-    of FIGURE_SIZE * DPI pixels to ``output``."""
+    of FIGURE_SIZE * DPI pixels to ``output``. ``output`` is checked before anything is computed
+    (:func:`dhkin.files.check_output`: its folder exists and is writable; an existing file is
+    replaced only with ``force``) and written atomically."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -71,8 +76,7 @@ def draw_maps(robot: Arm, output: str | Path, plane: str = "xz", offset: float =
     path = Path(output)
     if path.suffix.lower() != ".png":
         raise InputError(f"output: expected a .png file name, got {str(output)!r}", field="output")
-    if not path.parent.exists():
-        raise InputError(f"output: folder {str(path.parent)!r} does not exist", field="output")
+    check_output(path, force=force)
     workspace = workspace_slice(robot, plane, offset, rpy, resolution=resolution,
                                 progress=progress)
     slices = (joint_slice(robot, (2, 3), q_fixed, joint_resolution),
@@ -86,8 +90,10 @@ def draw_maps(robot: Arm, output: str | Path, plane: str = "xz", offset: float =
     figure.suptitle(f"{robot.name} ({model.family.replace('_', ' ')}): manipulability "
                     f"|det J| and singular loci", fontsize=15)
     figure.tight_layout(rect=(0, 0, 1, 0.95))
-    figure.savefig(path, dpi=DPI)
+    image = io.BytesIO()
+    figure.savefig(image, format="png", dpi=DPI)
     plt.close(figure)
+    write_file(path, image.getvalue(), force=force)
     return SingularityMaps(workspace=workspace, joint_slices=slices, path=path)
 
 

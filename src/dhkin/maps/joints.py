@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dhkin.dh import DHTable
+from dhkin.dh import DHTable, joint_vector
 from dhkin.errors import InputError
 from dhkin.maps.branches import DEFAULT_JOINT_RESOLUTION, Array, Mask, _check_resolution
 from dhkin.singularity import singularity_model
@@ -67,10 +67,8 @@ def joint_slice(robot: Arm, joints: tuple[int, int] = (2, 3), q_fixed: ArrayLike
             isinstance(j, (int, np.integer)) and 1 <= j <= robot.dof for j in joints):
         raise InputError(f"joints: expected two different joint numbers 1..{robot.dof}, "
                          f"got {joints!r}", field="joints")
-    fixed = default_fixed_q(robot) if q_fixed is None else np.asarray(q_fixed, dtype=float)
-    if fixed.shape != (robot.dof,) or not np.all(np.isfinite(fixed)):
-        raise InputError(f"q_fixed: expected {robot.dof} finite joint values, got "
-                         f"{np.asarray(q_fixed).tolist()!r}", field="q_fixed")
+    fixed = (default_fixed_q(robot) if q_fixed is None
+             else joint_vector(q_fixed, robot.dof, "q_fixed"))
     first, second = joints[0] - 1, joints[1] - 1
     u = np.linspace(*_slice_range(robot.table, first), resolution)
     v = np.linspace(*_slice_range(robot.table, second), resolution)

@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.dh import real_array
 from dhkin.errors import InputError
 from dhkin.maps.branches import (
     CHUNK,
@@ -157,19 +158,26 @@ def workspace_slice(robot: Arm, plane: str = "xz", offset: float = 0.0,
     ``extent`` ((u0, u1), (v0, v1)) in m (default:
     :func:`default_extent`). ``progress`` shows a tqdm bar on stderr.
     """
-    if plane not in PLANES:
+    if not isinstance(plane, str) or plane not in PLANES:
         raise InputError(f"plane: expected one of {list(PLANES)}, got {plane!r}", field="plane")
     _check_resolution(resolution)
     model = singularity_model(robot)
     if rpy is None:
         rpy = DEFAULT_RPY[model.family]
-    rpy_values = tuple(float(x) for x in np.asarray(rpy, dtype=float).reshape(-1))
+    rpy_values = tuple(float(x) for x in real_array(rpy, "rpy", "3 finite angles (rad)")
+                       .reshape(-1))
     if len(rpy_values) != 3 or not all(math.isfinite(x) for x in rpy_values):
         raise InputError(f"rpy: expected 3 finite angles (rad), got {rpy!r}", field="rpy")
-    if not math.isfinite(offset):
+    if isinstance(offset, bool) or not isinstance(offset, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(offset):
         raise InputError(f"offset: expected a finite distance (m), got {offset!r}", field="offset")
-    (u0, u1), (v0, v1) = extent if extent is not None else default_extent(robot, plane)
-    if not (u0 < u1 and v0 < v1):
+    bounds = real_array(extent if extent is not None else default_extent(robot, plane),
+                        "extent", "((u0, u1), (v0, v1)) in m")
+    if bounds.shape != (2, 2):
+        raise InputError(f"extent: expected ((u0, u1), (v0, v1)) in m, got shape {bounds.shape}",
+                         field="extent", value=bounds.shape, expected="shape (2, 2)")
+    (u0, u1), (v0, v1) = bounds.tolist()
+    if not (u0 < u1 and v0 < v1) or not np.all(np.isfinite(bounds)):
         raise InputError(f"extent: expected ((u0, u1), (v0, v1)) with u0 < u1 and "
                          f"v0 < v1, got {extent!r}", field="extent")
     u = np.linspace(u0, u1, resolution)

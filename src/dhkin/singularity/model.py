@@ -88,7 +88,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dhkin.dh import DHTable
+from dhkin.dh import DHTable, joint_batch
 from dhkin.errors import FamilyError, InputError, UnreachableError
 from dhkin.ik.family import FAMILIES, FamilyFit, fit_family
 from dhkin.ik.geometry import joint_axes
@@ -110,11 +110,11 @@ def family_fit(table: DHTable) -> FamilyFit:
         return fit_family(table)
     except FamilyError as exc:
         failed = exc.value if isinstance(exc.value, dict) else {}
-        lines = "\n  ".join(f"{family}: " + "; ".join(problems)
-                            for family, problems in failed.items())
+        lines = " | ".join(f"{family}: " + "; ".join(problems)
+                           for family, problems in failed.items())
         raise FamilyError(f"{table.name}: no analytic singularity family fits this table "
-                          f"(its numerical measures: robot.reference().manipulability(q)):"
-                          f"\n  {lines}", field="family", value=exc.value,
+                          f"(its numerical measures: robot.reference().manipulability(q)): "
+                          f"{lines}", field="family", value=exc.value,
                           expected=exc.expected) from exc
 
 
@@ -153,14 +153,7 @@ class SingularityModel:
         return f"SingularityModel({self.table.name!r}, {self.family}, {form})"
 
     def _batch(self, q: ArrayLike) -> Array:
-        Q = np.asarray(q, dtype=float)
-        if Q.ndim == 1:
-            Q = Q[None]
-        if Q.ndim != 2 or Q.shape[1] != 6:
-            raise InputError(f"q: expected shape (6,) or (N, 6), got {np.shape(q)}", field="q")
-        if not np.all(np.isfinite(Q)):
-            raise InputError("q: expected finite joint values, got NaN or inf", field="q")
-        return Q
+        return joint_batch(q, 6)[0]
 
     def factors(self, q: ArrayLike) -> Factors:
         """Signed factors and distances for q (6,) or (N, 6) (URDF joint values, rad and m)."""

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.dh import joint_vector
 from dhkin.errors import InputError, UnreachableError
 from dhkin.singularity.factors import Factors
 from dhkin.singularity.model import singularity_model
@@ -140,10 +141,7 @@ def solve_pose_path(robot: Arm, poses: ArrayLike, q_start: ArrayLike | None = No
     if targets.ndim != 3 or targets.shape[1:] != (4, 4):
         raise InputError(f"poses: expected shape (M, 4, 4), got {targets.shape}", field="poses")
     previous = (np.zeros(robot.dof) if q_start is None
-                else np.asarray(q_start, dtype=float).reshape(-1))
-    if previous.shape != (robot.dof,) or not np.all(np.isfinite(previous)):
-        raise InputError(f"q_start: expected {robot.dof} finite joint values, got "
-                         f"{np.asarray(q_start).tolist()!r}", field="q_start")
+                else joint_vector(q_start, robot.dof, "q_start"))
     path = np.empty((len(targets), robot.dof))
     for i, T in enumerate(targets):
         solutions = robot.ik(T, q_seed=previous)

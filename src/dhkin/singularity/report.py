@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dhkin.errors import InputError
+from dhkin.dh import joint_vector
 from dhkin.singularity.model import singularity_model
 from dhkin.singularity.thresholds import DISTANCE_UNITS, KINDS, Array, Thresholds, as_thresholds
 
@@ -91,10 +91,7 @@ def singularity_report(robot: Arm, q: ArrayLike,
     """
     limits = as_thresholds(thresholds)
     model = singularity_model(robot)
-    values = np.asarray(q, dtype=float)
-    if values.shape != (robot.dof,) or not np.all(np.isfinite(values)):
-        raise InputError(f"q: expected {robot.dof} finite joint values, got "
-                         f"{np.asarray(q).tolist()!r}", field="q")
+    values = joint_vector(q, robot.dof)
     factors = model.factors(values)
     distances = {kind: float(factors.distance(kind)[0]) for kind in model.kinds}
     kinds = tuple(kind for kind in KINDS if kind in distances

@@ -5,7 +5,7 @@ mean).
 
 from __future__ import annotations
 
-import math
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -44,7 +44,7 @@ class Thresholds:
         for kind in KINDS:
             value = getattr(self, kind)
             if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                    or not math.isfinite(value) or value < 0:
+                    or not 0 <= value <= sys.float_info.max:  # finite, even as a float
                 raise InputError(f"thresholds.{kind}: expected a finite number >= 0, "
                                  f"got {value!r}")
 

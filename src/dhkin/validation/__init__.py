@@ -40,6 +40,7 @@ from dhkin.validation.report import (
     SAMPLE_SETS,
     SampleResult,
     ValidationReport,
+    failures_json,
     write_failures,
 )
 from dhkin.validation.rerun import replay
@@ -93,6 +94,7 @@ __all__ = [
     "ValidationReport",
     "_resolvable",
     "adapt",
+    "failures_json",
     "load_ik",
     "own_ik",
     "perturbed_seeds",

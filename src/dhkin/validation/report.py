@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from dhkin.files import write_file
 from dhkin.validation.references import ReferenceSpec
 from dhkin.validation.samples import CONTINUITY_DISTANCE, SEED_PERTURBATION
 
@@ -174,15 +175,20 @@ class ValidationReport:
             f"max {c.get('max', 0):.0f}.", ""])
 
 
-def write_failures(report: ValidationReport, path: str | Path) -> Path:
-    """Write the failing samples as JSON (robot, tolerances, the reference description, and
-    per sample: set, sampled q, target pose, what came back, residuals, outcome, perturbed seed)
+def failures_json(report: ValidationReport) -> str:
+    """The failing samples as JSON text (robot, tolerances, the reference description, and per
+    sample: set, sampled q, target pose, what came back, residuals, outcome, perturbed seed)
     for ``dhkin validate --replay``."""
-    file = Path(path)
-    file.write_text(json.dumps({
+    return json.dumps({
         "robot": report.robot, "ik": report.ik_name, "tolerance": report.tolerance,
         "joint_tolerance": report.joint_tolerance, "seed": report.seed,
         "complete_expected": report.complete_expected, "reference": report.reference,
         "failures": [asdict(f) for f in report.failures],
-    }, indent=1), encoding="utf-8")
-    return file
+    }, indent=1)
+
+
+def write_failures(report: ValidationReport, path: str | Path, force: bool = False) -> Path:
+    """Write :func:`failures_json` of ``report`` to ``path``, as :mod:`dhkin.files` says
+    (atomically: a failed write leaves the old file whole; an existing file with other content
+    only with ``force``)."""
+    return write_file(path, failures_json(report), field="failures", force=force)

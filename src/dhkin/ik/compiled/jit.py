@@ -19,6 +19,12 @@ from typing import Any
 from numba import njit
 from numba.core import types
 
+from dhkin.ik.compiled.cache import caching_enabled
+
+#: Whether kernels are cached on disk: False only where no folder can be written
+#: (:mod:`dhkin.ik.compiled.cache`); they are then compiled in memory in every process.
+CACHE = caching_enabled()
+
 
 def _plain_types(dispatcher: Any) -> Any:
     """The numba dispatcher, typing calls from other kernels with unliteral argument types (see
@@ -43,13 +49,13 @@ def _compiler(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     return decorate
 
 
-#: Cached on disk, IEEE division (no ZeroDivisionError checks), GIL released.
-jit = _compiler(cache=True, error_model="numpy", nogil=True)
+#: Cached on disk (where :data:`CACHE`), IEEE division (no ZeroDivisionError checks), GIL released.
+jit = _compiler(cache=CACHE, error_model="numpy", nogil=True)
 #: The same, allowing a * b + c to contract into one fused multiply-add (more accurate, not
 #: less); nothing else of fast-math. Used by the elementary functions.
-jit_fma = _compiler(cache=True, error_model="numpy", nogil=True, fastmath={"contract"})
+jit_fma = _compiler(cache=CACHE, error_model="numpy", nogil=True, fastmath={"contract"})
 #: The same options as :data:`jit`, keeping numba's literal specialisation: for the few tiny
 #: helpers called with constant joint or row indices in hot loops, where a copy per constant
 #: costs little to compile and runs faster (the offset-wrist solver's screw motions: the UR5's
 #: batch rate was 6 % lower without it).
-jit_literal = njit(cache=True, error_model="numpy", nogil=True)
+jit_literal = njit(cache=CACHE, error_model="numpy", nogil=True)

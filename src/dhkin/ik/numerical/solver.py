@@ -66,6 +66,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin.description import read_urdf_file
 from dhkin.dh import DHTable
 from dhkin.errors import InputError, URDFError
 from dhkin.ik.numerical.descent import DescentMethods
@@ -156,10 +157,8 @@ class NumericalIK(DescentMethods):
     def from_urdf(cls, path: str | Path, tip: str, base: str | None = None,
                   settings: SolverSettings | None = None) -> NumericalIK:
         """Solver of the chain ``base`` (default: the root) -> ``tip`` of a URDF file."""
-        urdf_path = Path(path)
-        if not urdf_path.is_file():
-            raise URDFError(f"{urdf_path}: no such URDF file")
-        reference = Reference(urdf_path.read_text(), tip=tip, base=base, source=str(urdf_path))
+        urdf_path = Path(path)  # read_urdf_file: URDFError naming a missing or unreadable file
+        reference = Reference(read_urdf_file(urdf_path), tip=tip, base=base, source=str(urdf_path))
         return cls(reference, settings=settings)
 
     def _limits(self, lower: ArrayLike | None,

@@ -96,7 +96,9 @@ class _Chain:
 
     def tip_jacobian(self, frame: pin.ReferenceFrame) -> NDArray[np.float64]:
         """6 x dof Jacobian of the tip after :meth:`update`, chain-order columns."""
-        J = pin.getFrameJacobian(self.model, self.data, self.tip_id, frame)
+        # Pinocchio hands a one-column Jacobian (nv = 1) back as a vector: keep it 6 x nv.
+        J = np.reshape(pin.getFrameJacobian(self.model, self.data, self.tip_id, frame),
+                       (6, self.model.nv))
         return J if self.velocity_direct else J[:, self.index_v]
 
     def tip_placement(self, q: NDArray[np.float64]) -> pin.SE3:

@@ -29,6 +29,11 @@ Reported per library, single thread (EAIK's and py-opw's batch calls are given o
   is faster), like for like (against dhkin ``copies=False``, which returns principal solutions
   as the peers do).
 
+Arms without a closed-form family (FANUC CRX-10iA, xArm6) are solved by the general 6R solver
+(dhkin.ik.general6r; its batch call is a loop over single calls); their target is a median of at
+most GENERAL_TARGET_US per single call, and ``--profile`` splits it into the elimination kernel,
+the refinement kernel and the Python around them.
+
 ``--profile`` adds where dhkin's time goes (kernel stages and Python overhead); ``--memory`` a
 10^6-pose batch's traced peak memory. Timing is sensitive to other load on the machine: the
 report states the CPU and the load average.
@@ -64,7 +69,9 @@ EXACT = 1e-9
 COMPLETE = 1e-6
 TWO_PI = 2.0 * math.pi
 DEFAULT_ROBOTS = ("abb_irb1200_7_70", "ur5", "ur5e", "ur5e_calibrated", "tm5_900",
-                  "kinova_gen3_6dof")
+                  "kinova_gen3_6dof", "fanuc_crx10ia", "xarm6")
+#: Single-pose median target of the general 6R solver (issue 16), us.
+GENERAL_TARGET_US = 100.0
 PEERS = ("eaik", "opw", "ikgeo", "rtb")
 
 
@@ -518,6 +525,52 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
             ("single pose: ik(copies=False), total", whole_one)]
 
 
+def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[str, float]]:
+    """Per pose (us, median over the poses, fastest of the runs) of the general 6R solver's
+    single call: the elimination kernel (right side, left null space, leading matrix, the
+    eigenproblem, back-substitution), the refinement kernel (Newton on the exact chain,
+    verification, merging, the singular measure), and the Python around them (input checks,
+    2pi copies, the result)."""
+    from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates, settle
+    from dhkin.ik.general6r import singular_band
+
+    solver = robot.general_solver
+    assert solver is not None
+    n = min(len(poses.T), 2000)
+    targets = [np.ascontiguousarray(solver._base_inverse @ T) for T in poses.T[:n]]
+    T_dh = [np.ascontiguousarray(T @ solver._tool_inverse) for T in targets]
+    starts, info = np.empty((MAX_CANDIDATES, 6)), np.empty(2)
+    roots, errors, sigmas = (np.empty((MAX_CANDIDATES, 6)), np.empty((MAX_CANDIDATES, 2)),
+                             np.empty(MAX_CANDIDATES))
+    counts = [candidates(*solver._data, T, starts, info) for T in T_dh]
+    band = singular_band(EXACT)
+
+    def median_of(call: Callable[[int], object]) -> float:
+        best = math.inf
+        for _ in range(runs):
+            times = []
+            for k in range(n):
+                start = time.perf_counter_ns()
+                call(k)
+                times.append(time.perf_counter_ns() - start)
+            best = min(best, statistics.median(times) / 1000.0)
+        return best
+
+    def both(k: int) -> None:
+        count = candidates(*solver._data, T_dh[k], starts, info)
+        settle(solver.tip_chain, targets[k], starts, count, count, EXACT, solver.lever, band,
+               False, int(info[1]), roots, errors, sigmas)
+
+    eliminate = median_of(lambda k: candidates(*solver._data, T_dh[k], starts, info))
+    kernels = median_of(both)
+    single = median_of(lambda k: robot.ik(poses.T[k], copies=False))
+    return [("elimination kernel (eigenproblem included)", eliminate),
+            ("refinement kernel (Newton, verification, merging)", kernels - eliminate),
+            ("Python around the kernels", single - kernels),
+            ("single call, in all", single),
+            ("candidates per pose (mean)", float(np.mean(counts)))]
+
+
 def refined_against_ideal(robot: dhkin.Robot, poses: PoseSet, runs: int,
                           latency_poses: int) -> list[str]:
     """A refined table (closed form on its ideal model, then Newton on the exact chain)
@@ -601,7 +654,7 @@ def fmt(value: float, digits: int = 3) -> str:
 def report(robot: dhkin.Robot, rows: list[Row], skipped: list[tuple[str, str]],
            n: int) -> list[str]:
     like = next(r for r in rows if r.library.name == "dhkin")
-    lines = [f"### {robot.name} ({robot.ik_solver.family}), {n} poses", "",
+    lines = [f"### {robot.name} ({robot.ik_family}), {n} poses", "",
              "| library | single (us) | batch (poses/s) | sols/pose | max residual (m / rad) "
              "| exact | complete | q5 = 0: poses solved exactly, exact sols/pose, inexact share "
              "| dhkin speed-up, single | dhkin speed-up, batch |",
@@ -711,14 +764,20 @@ def main(argv: Sequence[str] | None = None) -> int:
             lines.append(f"Single pose {rows[0].single_us:.1f} us vs EAIK {eaik.single_us:.1f} "
                          f"us: {verdict} (ratio {rows[0].single_us / eaik.single_us:.2f}).")
         lines.append("")
+        general = robot.general_solver
+        if general is not None:
+            verdict = "met" if rows[0].single_us <= GENERAL_TARGET_US else "missed"
+            lines.append(f"General 6R solver: single pose median {rows[0].single_us:.1f} us "
+                         f"(target {GENERAL_TARGET_US:.0f} us: {verdict}).")
         if robot.has_closed_form and robot.ik_solver.fit.refine:
             lines += refined_against_ideal(robot, generic, args.runs, args.latency_poses)
         if args.profile:
             lines += [f"Where dhkin's time goes ({robot.name}, per pose, us; each stage timed on "
                       f"its own, fastest of {args.runs} runs):", "",
                       "| stage | us/pose |", "|---|---:|"]
-            lines += [f"| {stage} | {value:.3f} |"
-                      for stage, value in profile_dhkin(robot, generic, args.runs)]
+            stages = (profile_general(robot, generic, args.runs) if general is not None
+                      else profile_dhkin(robot, generic, args.runs))
+            lines += [f"| {stage} | {value:.3f} |" for stage, value in stages]
             lines.append("")
         if args.memory:
             lines += [f"10^6 poses ({robot.name}): traced peak memory (numpy arrays; the "

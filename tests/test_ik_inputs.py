@@ -218,8 +218,8 @@ BAND_EDGES = {
 @pytest.mark.parametrize("edge", sorted(BAND_EDGES))
 def test_band_edge(edge: str, inside: bool) -> None:
     """alpha2 (axes 2 and 3 parallel) or a5 (axes 5 and 6 meet) off by just under / over the
-    band: refined and exact inside; beyond it no family, and IK falls back on the numerical
-    solver."""
+    band: refined and exact inside; beyond it no family, and the general 6R solver answers
+    (every solution, the pose's q among them)."""
     change, message, seed = BAND_EDGES[edge]
     table = _ur5_with(**change(0.95 if inside else 1.05))
     if inside:
@@ -229,7 +229,10 @@ def test_band_edge(edge: str, inside: bool) -> None:
     else:
         with pytest.raises(FamilyError, match=message):
             fit_family(table)
-        assert dhkin.Robot(table).ik(dhkin.Robot(table).fk(np.zeros(6))).numerical
+        robot = dhkin.Robot(table)
+        solutions = robot.ik(robot.fk(np.zeros(6)))
+        assert solutions.family == "general6r" and not solutions.numerical
+        assert np.abs(solutions.nearest(np.zeros(6))).max() <= 1e-6
 
 
 @pytest.mark.parametrize("factor", [3.0, 8.0])

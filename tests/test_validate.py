@@ -476,3 +476,24 @@ def test_joint_tolerance_follows_the_conditioning(abb: dhkin.Robot) -> None:
     assert sigma_min < 1e-9
     assert _resolvable(abb, near, 1e-6) == pytest.approx(1e-6 + POSE_ROUNDING / sigma_min)
     assert _resolvable(abb, near, 1e-6) < 1e-2
+
+
+def test_general_6r_arms_are_validated_completely() -> None:
+    """The FANUC CRX-10iA fits no family: dhkin's own IK is the general 6R solver, a complete
+    reference (missing samples and missing branches counted, seeded), and passes every check;
+    an IK that returns only the solution nearest the seed (as a numerical IK would) loses no
+    sample but lacks branches on most poses."""
+    robot = dhkin.load("fanuc_crx10ia")
+    assert robot.complete_ik and robot.ik_family == "general6r"
+    report = validate(robot, n=60, seed=1, reference="exact")
+    assert report.complete_expected and report.branch_checked == report.samples
+    assert report.ok and report.counts["success"] == report.samples, report.summary()
+
+    def nearest_only(T: np.ndarray, q_seed: np.ndarray | None = None) -> np.ndarray:
+        solutions = robot.ik(T, q_seed=q_seed)
+        reference = np.zeros(6) if q_seed is None else q_seed
+        return solutions.q[[int(np.argmin(np.linalg.norm(solutions.q - reference, axis=1)))]]
+
+    lacking = validate(robot, nearest_only, n=60, seed=1, reference="exact")
+    assert lacking.counts["missing"] == lacking.counts["wrong"] == 0
+    assert lacking.rate("missing_branch") > 0.5 and not lacking.ok

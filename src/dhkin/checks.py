@@ -8,7 +8,8 @@ name and type differences, such as a vendor's continuous joint where the table h
 listed in the cell without failing it); the IK is cross-validated (dhkin.validation) twice:
 
 * "ik vs pin": targets made and solutions checked by Pinocchio on the exact generated URDF
-  (``reference="exact"``): closed-form IK on ``ik_poses`` uniform poses plus the special-angle and
+  (``reference="exact"``): closed-form IK (a family, or the general 6R solver for six-revolute
+  arms without one: CRX-10iA, xArm6) on ``ik_poses`` uniform poses plus the special-angle and
   near-singular sets, with zero wrong, missing, missing-branch and discontinuous samples
   required; the numerical IK (robots without a closed form, one solution per call) on
   NUMERICAL_POSES poses, with zero wrong and zero unsolved required. The exact URDF, not the
@@ -138,9 +139,9 @@ def check_ik(robot: Robot, poses: int, seed: int) -> CheckCell:
     """Cross-validate the robot's own IK on the exact generated URDF (see the module docstring)."""
     from dhkin.validation import validate
 
-    n = poses if robot.has_closed_form else min(poses, NUMERICAL_POSES)
+    n = poses if robot.complete_ik else min(poses, NUMERICAL_POSES)
     report = validate(robot, n=n, seed=seed, progress=sys.stderr.isatty(), reference="exact")
-    family = robot.ik_solver.family if robot.has_closed_form else "numerical"
+    family = robot.ik_family
     return CheckCell(report.ok, f"{family}: {_ik_text(report)}")
 
 

@@ -48,14 +48,9 @@ def _default_reference_dir() -> Path | None:
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
-    from dhkin.errors import FamilyError
-
     for name in builtin_names():
         robot = load(name)
-        try:
-            family = robot.ik_solver.family
-        except FamilyError:
-            family = "no closed form"
+        family = robot.ik_family
         print(f"{name:20s} {robot.dof} joints  {robot.table.convention:8s}  {family:16s} "
               f"{robot.table.description}")
     return EXIT_OK
@@ -195,7 +190,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
     robot = load(args.robot)
     ik, name = None, args.ik  # None: the robot's own IK, closed form or numerical, as the API
     if args.ik is None:
-        family = robot.ik_solver.family if robot.has_closed_form else "numerical"
+        family = robot.ik_family
         name = f"dhkin's own IK ({family})"
     else:
         ik = load_ik(args.ik)

@@ -20,6 +20,7 @@ from dhkin.table_file import load_table
 from dhkin.urdf import GeneratedFiles, generate
 
 if TYPE_CHECKING:
+    from dhkin.ik.general6r import General6RSolver
     from dhkin.ik.numerical import NumericalIK
     from dhkin.singularity import SingularityReport, Thresholds
 
@@ -129,6 +130,36 @@ class Robot:
         """Whether a closed-form IK family fits this robot's table (within the band)."""
         return self._closed_form_solver is not None
 
+    @cached_property
+    def general_solver(self) -> General6RSolver | None:
+        """The general 6R solver (dhkin.ik.general6r) when the table has six revolute joints
+        and no closed-form family fits; None otherwise, or when it cannot be built for the
+        table (every elimination's matrix polynomial singular: :meth:`ik` then falls back on
+        the numerical IK)."""
+        if self.has_closed_form or self.dof != 6 or not all(
+                j.is_revolute for j in self.table.joints):
+            return None
+        from dhkin.ik.general6r import General6RSolver
+
+        try:
+            return General6RSolver(self.table)
+        except FamilyError:
+            return None
+
+    @property
+    def ik_family(self) -> str:
+        """Which IK answers :meth:`ik`: the closed-form family's name, "general6r" (every
+        solution of a six-revolute arm outside the families) or "numerical"."""
+        if self._closed_form_solver is not None:
+            return self._closed_form_solver.family
+        return "general6r" if self.general_solver is not None else "numerical"
+
+    @property
+    def complete_ik(self) -> bool:
+        """Whether :meth:`ik` returns every solution (a closed-form family or the general 6R
+        solver), not the numerical IK's one per call."""
+        return self.ik_family != "numerical"
+
     def ik(self, T: ArrayLike, q_seed: ArrayLike | None = None,
            tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
            copies: bool = False) -> IKSolutions:
@@ -142,14 +173,19 @@ class Robot:
         off orthonormal by rounding is projected onto the nearest rotation
         (``result.projection`` says how far). An empty result's ``reason`` says why.
 
-        When no closed-form family fits, the numerical solver answers (``result.numerical`` is
-        True, family "numerical"): the solution from the seed's basin first, not necessarily
-        every solution.
+        When no closed-form family fits a chain of six revolute joints, the general 6R solver
+        answers (family "general6r", :attr:`general_solver`): every solution, no branch labels.
+        Otherwise (other joint counts, prismatic joints, or a table the general solver cannot
+        be built for) the numerical solver answers (``result.numerical`` is True, family
+        "numerical"): the solution from the seed's basin first, not necessarily every solution.
         """
         solver = self._closed_form_solver
-        if solver is None:
-            return self.numerical_solver().solve(T, q_seed, tolerance=tolerance, tcp=tcp)
-        return solver.solve_one(T, q_seed, tolerance, tcp, copies)
+        if solver is not None:
+            return solver.solve_one(T, q_seed, tolerance, tcp, copies)
+        general = self.general_solver
+        if general is not None:
+            return general.solve_one(T, q_seed, tolerance, tcp, copies)
+        return self.numerical_solver().solve(T, q_seed, tolerance=tolerance, tcp=tcp)
 
     def ik_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                  tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
@@ -162,10 +198,12 @@ class Robot:
         largest count m (m <= 8 without copies; with every copy a UR arm's +-360 deg joints give
         up to 256 or more per pose: see :meth:`ik_batch_chunks` for very large batches).
         ``workers`` threads share the poses (default: the CPUs this process may use; the
-        result does not depend on it). Without a closed-form family the numerical solver
-        answers (``copies``, ``chunk_size`` and ``workers`` do not apply).
+        result does not depend on it). Without a closed-form family the general 6R solver
+        answers pose by pose (a loop; ``chunk_size`` and ``workers`` do not apply), and where
+        that does not apply the numerical solver (``copies``, ``chunk_size`` and ``workers``
+        do not apply).
         """
-        if self._closed_form_solver is None:
+        if self._closed_form_solver is None and self.general_solver is None:
             return self.numerical_solver().solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)
         batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
         return batch.q, batch.valid
@@ -174,7 +212,11 @@ class Robot:
                           tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
                           copies: bool = False, chunk_size: int = DEFAULT_CHUNK,
                           workers: int | None = None) -> IKBatch:
-        """Like :meth:`ik_batch`, with flags, branch indices, residuals and projections."""
+        """Like :meth:`ik_batch`, with flags, branch indices, residuals and projections (the
+        closed-form family, else the general 6R solver; FamilyError for neither)."""
+        general = self.general_solver
+        if self._closed_form_solver is None and general is not None:
+            return general.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
         return self.ik_solver.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size,
                                           workers)
 

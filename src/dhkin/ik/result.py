@@ -17,7 +17,12 @@ from dhkin.errors import InputError
 
 #: Singularity flags, stored as bits so that batches keep them in one uint8 array.
 WRIST, ELBOW, SHOULDER = 1, 2, 4
-FLAG_NAMES: dict[int, str] = {WRIST: "wrist", ELBOW: "elbow", SHOULDER: "shoulder"}
+#: The general 6R solver's flag (dhkin.ik.general6r): the solution's Jacobian or its pose's
+#: eigenproblem is ill-conditioned (a singular pose of an arm without a family's named
+#: singularities).
+SINGULAR = 8
+FLAG_NAMES: dict[int, str] = {WRIST: "wrist", ELBOW: "elbow", SHOULDER: "shoulder",
+                              SINGULAR: "singular"}
 #: The words of configuration labels, the same in every family: per label, its two values.
 #: shoulder: which side of axis 1 the arm reaches to; elbow: the elbow above or below the line
 #: from the shoulder to the wrist; wrist: the sign of q5 relative to the shoulder side; slide

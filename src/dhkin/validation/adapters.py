@@ -72,10 +72,11 @@ def adapt(ik: IKCallable, degrees: bool = False, tool: ArrayLike | None = None) 
 def own_ik(robot: Arm) -> IKCallable:
     """dhkin's own IK of ``robot`` as a validation callable.
 
-    The closed-form IK takes the sampled q as seed (it only uses it for free joints at a
-    singularity). The numerical IK gets no seed: starting at the answer would prove nothing.
+    The closed-form IK and the general 6R solver take the sampled q as seed (they only use it
+    at a singularity: for free joints, and the general solver as a Newton start where a root
+    is singular). The numerical IK gets no seed: starting at the answer would prove nothing.
     """
-    if not robot.has_closed_form:
+    if not robot.complete_ik:
         def numerical(T: NDArray[np.float64]) -> NDArray:
             return robot.ik(T).q
 

@@ -42,13 +42,15 @@ Outcome per sample (one each, the first that applies, in this order):
   ``joint_tolerance + max(POSE_ROUNDING, reference deviation, residual) / sigma_min``
   (sigma_min from Pinocchio's Jacobian at the sampled q; residual: the returned solutions'
   largest error on the reference);
-* ``missing_branch``: a branch of the closed-form solution set is not among the solutions, on
+* ``missing_branch``: a branch of the complete solution set is not among the solutions, on
   any pose, whether or not the sampled q lies on it. The branches of a pose are dhkin's own
-  closed-form answer ``robot.ik(T, q_seed=q, copies=False)`` (one solution per branch; those
-  that verify on the reference); each must be matched by a returned solution like the sampled q
-  is above (mod 2pi, same widening at the branch's own sigma_min; on the wrist singularity, where
-  a branch is a family, joints 1 and 5 only). Checked for robots with a closed-form family and
-  IKs that promise every solution (``complete_expected``);
+  complete answer ``robot.ik(T, q_seed=q, copies=False)``: the closed-form family's (one
+  solution per branch), or for six-revolute arms without a family the general 6R solver's
+  (every root; dhkin.ik.general6r); those that verify on the reference. Each must be matched
+  by a returned solution like the sampled q is above (mod 2pi, same widening at the branch's
+  own sigma_min; on the wrist singularity, where a branch is a family, joints 1 and 5 only).
+  Checked for robots with a complete IK (``robot.complete_ik``) and IKs that promise every
+  solution (``complete_expected``);
 * ``discontinuous``: on the singular sets (:data:`CONTINUITY_SETS`), an IK that takes ``q_seed``
   is called a second time with the seed perturbed by :data:`SEED_PERTURBATION` rad (each
   revolute joint +- at random, fixed seed, clipped to the limits); the returned solution nearest
@@ -226,7 +228,8 @@ def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64]
 def _missing_branches(robot: Arm, model: TargetModel, T: NDArray[np.float64],
                       q_sampled: NDArray[np.float64], Q: NDArray[np.float64], tolerance: float,
                       joint_tolerance: float) -> list[tuple[str, float]]:
-    """(configuration, closest distance) of each closed-form branch of T that Q lacks.
+    """(configuration, closest distance) of each branch of T (closed form or general 6R) that
+    Q lacks.
 
     The branches are ``robot.ik(T, q_seed=q_sampled, copies=False)``, those that verify on the
     reference. A branch on the wrist singularity is a one-parameter family: only joints 1 and 5
@@ -336,7 +339,7 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
         progress=bool(arguments.flag(progress, "progress")),
         ik_name=ik_name_of(ik if ik is not None else own_ik(robot),
                          arguments.optional_text(ik_name, "ik_name")),
-        complete_expected=(ik is not None or robot.has_closed_form
+        complete_expected=(ik is not None or robot.complete_ik
                            if arguments.flag(complete_expected, "complete_expected",
                                              optional=True) is None
                            else bool(complete_expected)))
@@ -381,7 +384,7 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
     by_configuration: dict[str, Counter[str]] = {}
     all_position, all_rotation, n_solutions = [], [], []
     seeded = takes_seed(caller.ik)
-    check_branches = settings.complete_expected and robot.has_closed_form
+    check_branches = settings.complete_expected and robot.complete_ik
     for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", settings.progress):
         call = caller(targets[k], q[k])
         returned = call.solutions

@@ -1,0 +1,659 @@
+"""Closed-form IK of any six-revolute chain: every solution, by algebraic elimination.
+
+:class:`General6RSolver` solves a table of six revolute joints (either DH convention, offsets,
+directions, base, tool, corrections) whatever its geometry. Poses are base_link -> tool0 (or a
+TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
+
+1. The exact chain (:func:`dhkin.ik.plan.chain_array`) is written as a standard-DH model
+   (:mod:`dhkin.ik.general6r_model`), forwards or tip to base (the reversed chain solves
+   T^-1), lengths scaled to order one.
+2. Raghavan and Roth's elimination (:mod:`dhkin.ik.general6r_elimination`) in one of three
+   arrangements gives a 12 x 12 matrix polynomial of degree two in the half-angle tangent of
+   the eliminated joint; its 24 eigenvalues (QZ on the companion pencil) hold every solution.
+   The arrangement and direction are chosen per table (:func:`choose_arrangement`): the one
+   whose matrix polynomial is regular (Raghavan and Roth's own arrangement is singular for
+   every x3 on arms whose axes 1 and 2 meet, such as the UR5, CRX-10iA and xArm6) and best
+   conditioned on sample poses.
+3. Each candidate is refined by Newton on the exact chain (:func:`dhkin.ik.compiled.chain.refine`)
+   and verified by FK at the tolerance; candidates that reach the same root are one (two roots
+   are one when the midpoint of their joint values verifies too).
+4. Joint limits and 2pi copies follow the families' rules (docs/ik_core.md, "The answer").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+from dhkin.dh import DHTable
+from dhkin.errors import FamilyError, InputError
+from dhkin.ik.general6r_elimination import Elimination
+from dhkin.ik.general6r_model import Model, _inverse, dh_row, refit
+from dhkin.ik.inputs import TWO_PI, as_targets, check_tolerance, pose_error_message
+from dhkin.ik.result import FLAG_NAMES, Configuration, IKBatch, IKSolutions
+from dhkin.tolerances import DEFAULT_TOLERANCE
+
+#: A candidate angle is taken from an eigenvalue whose half-angle arc tangent's imaginary
+#: part is at most this (rad). Rounding turns a double real root (a singular pose) into a
+#: complex pair whose imaginary part is ~sqrt(rounding), ~1e-8; near a fold, two real roots
+#: 0.1 rad apart in the chain can be a complex pair of the model. Spurious eigenvalues
+#: (x3 = +-i) lie at infinite imaginary angle. Candidates are cheap (Newton decides), so the
+#: band is wide.
+IMAGINARY_BAND = 0.1
+
+
+#: The free angles eliminated first: theta_k = shift + 2 atan(x3). An angle with no special
+#: value (0, pi/2, pi), so that a pose at theta_k = shift + pi (an eigenvalue at infinity,
+#: handled by QZ anyway) is unlikely.
+SHIFT = 0.5772156649015329
+
+
+#: Singular values of the 12 x 12 matrix polynomial at a generic x3 below this fraction of
+#: its norm mean the arrangement's polynomial is singular (its determinant vanishes for
+#: every x3): rounding alone leaves ~1e-16 there, a regular one ~1e-5 or more.
+SINGULAR_PENCIL = 1e-10
+
+
+def singular_band(tolerance: float) -> float:
+    """A root is flagged "singular" when the smallest singular value sigma of its Jacobian
+    (linear rows divided by the lever, so that rad and m/lever weigh alike) is at most
+    sqrt(tolerance): a step delta along the weakest direction moves the pose by about
+    sigma delta + delta^2 / 2 (curvature ~1 per rad on the scaled chain), so with sigma <=
+    sqrt(tolerance) every point within ~sqrt(tolerance) rad of the root along that direction
+    verifies as well: at the tolerance the pose cannot be told from a singular one (a double
+    root, or a curve of solutions where a joint is free). 3.2e-5 at the default 1e-9."""
+    return math.sqrt(tolerance)
+
+
+#: The seed's member of a curve of solutions (a joint free at a singular pose) is followed by
+#: at most this many steps along the Jacobian's weak directions towards the seed, each refined
+#: back onto the solutions by Newton and kept only when it verifies and is nearer the seed.
+SEED_STEPS = 12
+
+
+@dataclass(frozen=True)
+class Arrangement:
+    """One way of eliminating: the chain's direction (``reversed``: tip to base) and the
+    eliminated joint ``k`` of the model (0-based)."""
+
+    reversed: bool
+    k: int
+
+
+class General6RSolver:
+    """Every solution of a six-revolute table (see the module docstring)."""
+
+    family = "general6r"
+
+    def __init__(self, table: DHTable, arrangement: Arrangement | None = None) -> None:
+        if table.dof != 6 or not all(j.is_revolute for j in table.joints):
+            raise FamilyError(f"{table.name}: the general 6R solver needs six revolute joints")
+        from dhkin.ik.plan import chain_array
+
+        self.table = table
+        self.dof = 6
+        self.chain = chain_array(table)
+        pre = np.tile(np.eye(4), (7, 1, 1))
+        for j in range(7):
+            pre[j, :3, :] = self.chain[j, :12].reshape(3, 4)
+        self.pre = pre
+        self.direction = self.chain[:6, 13].copy()
+        self.offset = self.chain[:6, 14].copy()
+        self._base_inverse = _inverse(table.base)
+        self._tool_inverse = _inverse(table.tool)
+        self.lever = max(1.0, float(np.max(np.abs(np.diff(
+            _frames_at_zero(pre)[:, :3, 3], axis=0)))))
+        #: The exact chain to tool0 (the point verified; ``chain`` ends at DH frame 6).
+        self.tip_chain = self.chain.copy()
+        self.tip_chain[6, :12] = (pre[6] @ table.tool)[:3].ravel()
+        self.tip_lever = self.lever + float(np.linalg.norm(table.tool[:3, 3]))
+        if arrangement is None:
+            arrangement = choose_arrangement(self)
+        self.arrangement = arrangement
+        self.model, self.elimination = self._eliminator(arrangement)
+        self._data = self.kernel_data()
+        self._configurations: dict[tuple[int, ...], Configuration] = {}
+        self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
+
+    def kernel_data(self, arrangement: Arrangement | None = None,
+                    elimination: Elimination | None = None) -> tuple[NDArray[np.float64], ...]:
+        """The compiled candidates' constant arguments (dhkin.ik.compiled.general6r)."""
+        from dhkin.ik.general6r_elimination import _HALF2, _V_INV
+
+        arrangement = arrangement or self.arrangement
+        el = elimination or self.elimination
+        model = el.model
+        before, after = el.sample_factors()
+        rows = np.array(el.rows)
+        setup = np.array([el.shift, el.k, float(arrangement.reversed), model.scale,
+                          IMAGINARY_BAND])
+        right_inverse = np.asarray(np.kron(_V_INV, _V_INV), dtype=np.float64)
+        return (np.ascontiguousarray(el.P), before, after, right_inverse,
+                np.ascontiguousarray(el.mix), np.ascontiguousarray(_HALF2), rows,
+                model.phi.copy(), _inverse(model.D0), _inverse(model.E), setup,
+                self.direction, self.offset)
+
+    def compiled_candidates(self, T_dh: NDArray[np.float64],
+                            data: tuple[NDArray[np.float64], ...] | None = None
+                            ) -> NDArray[np.float64]:
+        """:meth:`candidates`, compiled (the same values)."""
+        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
+
+        out = np.empty((MAX_CANDIDATES, 6))
+        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out, np.empty(2))
+        return out[:count]
+
+    def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
+        pre = self.pre
+        if arrangement.reversed:
+            pre = np.stack([_inverse(pre[6 - i]) for i in range(7)])
+        model = refit(pre)
+        return model, Elimination(model, arrangement.k, SHIFT)
+
+    # -- candidates -----------------------------------------------------------------------
+
+    def candidates(self, T_dh: NDArray[np.float64], arrangement: Arrangement | None = None,
+                   elimination: Elimination | None = None) -> NDArray[np.float64]:
+        """Joint values (m, 6) of every near-real eigenvalue for the target T_dh (DH frame 0 ->
+        DH frame 6 of the exact chain), before refinement."""
+        arrangement = arrangement or self.arrangement
+        el = elimination or self.elimination
+        model = el.model
+        target = _inverse(T_dh) if arrangement.reversed else T_dh
+        H = _inverse(model.D0) @ target @ _inverse(model.E)
+        H[:3, 3] /= model.scale
+        A, B, C, Q, r = el.pencil(H)
+        n = 12
+        left = np.zeros((24, 24))
+        left[:n, n:] = np.eye(n)
+        left[n:, :n] = -C
+        left[n:, n:] = -B
+        right = np.eye(24)
+        right[n:, n:] = A
+        (alpha, beta), vectors = scipy.linalg.eig(left, right, homogeneous_eigvals=True,
+                                                  check_finite=False)
+        thetas = []
+        for index in range(24):
+            a, b = alpha[index], beta[index]
+            if not (np.isfinite(a) and np.isfinite(b)):
+                continue
+            if abs(b) > abs(a) * 1e-300 and b != 0:
+                x = a / b
+                with np.errstate(divide="ignore", invalid="ignore"):  # x = +-i: spurious
+                    angle = 2.0 * np.arctan(x)
+                if not np.isfinite(angle) or abs(angle.imag) > IMAGINARY_BAND:
+                    continue
+                theta_k = el.shift + float(angle.real)
+                vector = vectors[:n, index] if abs(x) <= 1.0 else vectors[n:, index]
+            else:
+                theta_k = el.shift + math.pi
+                vector = vectors[n:, index]
+            top = vector[int(np.argmax(np.abs(vector)))]
+            m = (vector * (np.conj(top) / abs(top))).real.reshape(4, 3)
+            theta_1 = _ratio_angle(m, axis=0)
+            theta_2 = _ratio_angle(m, axis=1)
+            thetas.append(self._back_substitute(el, H, theta_k, theta_1, theta_2, Q, r))
+        if not thetas:
+            return np.zeros((0, 6))
+        theta = np.array(thetas)
+        v = theta - model.phi
+        if arrangement.reversed:
+            v = -v[:, ::-1]
+        return (v - self.offset) / self.direction
+
+    @staticmethod
+    def _back_substitute(el: Elimination, H: NDArray[np.float64], theta_k: float,
+                         theta_1: float, theta_2: float, Q: NDArray[np.float64],
+                         r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """All six model angles from the eliminated one and its two neighbours: the right
+        side's two joints from the 14 equations (least squares: Q y = P x - r), the dropped
+        joint from the orientation."""
+        k = el.k
+        basis = [np.array([math.cos(t), math.sin(t), 1.0]) for t in (theta_k, theta_1, theta_2)]
+        P = el.P[0] * basis[0][0] + el.P[1] * basis[0][1] + el.P[2]
+        y = np.linalg.lstsq(Q, P @ np.kron(basis[1], basis[2]) - r, rcond=None)[0]
+        theta = np.zeros(6)
+        theta[k], theta[k + 1], theta[k + 2] = theta_k, theta_1, theta_2
+        a, b = el.right_joints
+        theta[a] = math.atan2(y[5], y[2])
+        theta[b] = math.atan2(y[7], y[6])
+        g = el.dropped
+        before = np.eye(4)
+        for j in range(g):
+            before = before @ dh_row(theta[j], *el.rows[j])
+        after = np.eye(4)
+        for j in range(g + 1, 6):
+            after = after @ dh_row(theta[j], *el.rows[j])
+        A_g = _inverse(before) @ H @ _inverse(after)
+        theta[g] = math.atan2(A_g[1, 0], A_g[0, 0])
+        return theta
+
+    # -- solutions ------------------------------------------------------------------------
+
+    def target_dh(self, T: ArrayLike, tcp: ArrayLike | None = None) -> NDArray[np.float64]:
+        """base_link -> tool0 (or TCP) pose -> DH frame 0 -> DH frame 6 of the exact chain."""
+        target = np.asarray(T, dtype=float)
+        if target.shape != (4, 4) or not np.all(np.isfinite(target)):
+            raise InputError(f"T: expected a finite (4, 4) pose, got shape {target.shape}",
+                             field="T")
+        tool_inverse = self._tool_inverse
+        if tcp is not None:
+            tool_inverse = _inverse(np.asarray(tcp, dtype=float)) @ tool_inverse
+        return self._base_inverse @ target @ tool_inverse
+
+    @staticmethod
+    def _pose(T: ArrayLike, name: str) -> tuple[NDArray[np.float64], float]:
+        """A pose checked and projected as the families do (docs/ik_core.md, "Input poses as
+        they come"): the pose with its rotation block the nearest rotation, and how far that
+        moved it (Frobenius norm); InputError naming ``name`` otherwise."""
+        from dhkin.ik.compiled.pose import project, status
+
+        try:
+            target = np.ascontiguousarray(T, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{name}: expected a (4, 4) pose of numbers ({exc})",
+                             field=name) from exc
+        if target.shape != (4, 4):
+            raise InputError(f"{name}: expected a (4, 4) pose, got shape {np.shape(T)}",
+                             field=name)
+        code = int(status(target))
+        if code:
+            raise InputError(pose_error_message(name, target, code), field=name)
+        out = np.eye(4)
+        projection = float(project(target, out[:3]))
+        return out, projection
+
+    def _seed(self, q_seed: ArrayLike | None) -> NDArray[np.float64] | None:
+        if q_seed is None:
+            return None
+        try:
+            seed = np.asarray(q_seed, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"q_seed: expected 6 finite numbers ({exc})",
+                             field="q_seed") from exc
+        if seed.shape == (1, 6):
+            seed = seed[0]
+        if seed.shape != (6,) or not np.all(np.isfinite(seed)):
+            raise InputError(field="q_seed", value=np.shape(seed), expected="6 finite values")
+        return np.ascontiguousarray(seed)
+
+    def _tip(self, tcp: ArrayLike | None) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                   float]:
+        """The exact chain to the point verified (tool0, or the TCP), (tool @ tcp)^-1, and the
+        verification tolerance's lever (see :meth:`verification_tolerance`)."""
+        if tcp is None:
+            return self.tip_chain, self._tool_inverse, self.tip_lever
+        frame, _ = self._pose(tcp, "tcp")
+        tool = self.table.tool @ frame
+        chain = self.chain.copy()
+        chain[6, :12] = (self.pre[6] @ tool)[:3].ravel()
+        lever = max(self.tip_lever, self.lever + float(np.linalg.norm(tool[:3, 3])))
+        return chain, _inverse(tool), lever
+
+    @staticmethod
+    def verification_tolerance(tolerance: float, lever: float) -> float:
+        """The tolerance solutions are verified at on our FK: ``tolerance`` less the FK rounding
+        margin (dhkin.ik.compiled.plan.FK_ROUNDING per metre of lever), as in the families, so
+        that a solution verified on our FK is within ``tolerance`` on the oracle's too."""
+        from dhkin.ik.compiled.plan import FK_ROUNDING
+
+        return max(tolerance - FK_ROUNDING * lever, 0.5 * tolerance)
+
+    def roots(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
+              tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+        """The verified, distinct solutions (k, 6) wrapped to (-pi, pi] for the target T_dh (DH
+        frame 0 -> DH frame 6), their residuals there (k, 2), and how many candidates did not
+        verify."""
+        return self._roots(T_dh, T_dh, self.chain, q_seed, tolerance)
+
+    def _roots(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
+               chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
+               tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+        """:meth:`roots`, refined and verified on ``chain`` against ``tip_target`` (DH frame
+        0 -> the chain's last frame)."""
+        roots, errors, failed, _ = self._settled(T_dh, tip_target, chain, q_seed, tolerance,
+                                                 self.lever)
+        return roots, errors, failed
+
+    def _settled(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
+                 chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
+                 tolerance: float, lever: float
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, NDArray[np.bool_]]:
+        """:meth:`_roots` and whether each root is singular (:func:`singular_band`, or the
+        pose's eigenproblem ill-conditioned: no leading matrix reached LEAD_CONDITION)."""
+        from dhkin.ik.compiled.general6r import (
+            LEAD_CONDITION,
+            MAX_CANDIDATES,
+            candidates,
+            settle,
+        )
+
+        starts = np.empty((MAX_CANDIDATES, 6))
+        info = np.empty(2)
+        count = candidates(*self._data, np.ascontiguousarray(T_dh), starts, info)
+        seeded = count
+        if q_seed is not None:
+            starts[count] = q_seed
+            count += 1
+        roots = np.empty((MAX_CANDIDATES, 6))
+        errors = np.empty((MAX_CANDIDATES, 2))
+        sigmas = np.empty(MAX_CANDIDATES)
+        band = singular_band(tolerance)
+        ill_conditioned = not info[0] >= LEAD_CONDITION
+        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, count, seeded,
+                               tolerance, lever, band, ill_conditioned, int(info[1]), roots,
+                               errors, sigmas)
+        singular = sigmas[:found] <= band
+        if ill_conditioned:
+            singular[:] = True
+        return roots[:found], errors[:found], failed, singular
+
+    def solve_one(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                  tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                  copies: bool = False) -> IKSolutions:
+        """Every solution of one pose within the joint limits: per root its in-limit 2pi copy
+        nearest ``q_seed`` (nearest 0 without one), or every copy with ``copies``. Inputs are
+        checked as by the families (:class:`dhkin.ik.solver.ClosedFormSolver`); solutions are
+        verified by FK at the TCP (tool0, or ``tcp``)."""
+        tolerance = check_tolerance(tolerance)
+        target, projection = self._pose(T, "T")
+        return self._solve(target, projection, self._seed(q_seed), tolerance, self._tip(tcp),
+                           copies)
+
+    def _solve(self, target: NDArray[np.float64], projection: float,
+               seed: NDArray[np.float64] | None, tolerance: float,
+               tip: tuple[NDArray[np.float64], NDArray[np.float64], float],
+               copies: bool) -> IKSolutions:
+        """:meth:`solve_one` of a checked, projected pose."""
+        chain, tool_inverse, lever = tip
+        tip_target = self._base_inverse @ target
+        T_dh = tip_target @ tool_inverse
+        verify = self.verification_tolerance(tolerance, lever)
+        if seed is None:  # as in the families: without a seed, free joints are chosen near 0
+            seed = np.zeros(6)
+        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, seed, verify,
+                                                        lever)
+        if np.any(singular):
+            self._seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
+        if roots.shape[0] == 0:
+            reason = ("no real solution: the elimination found no root that verifies on the "
+                      f"exact chain at tolerance {tolerance:g}")
+            if failed:
+                reason += f" ({failed} candidate(s) did not converge)"
+            return IKSolutions(q=np.zeros((0, 6)), family=self.family, reason=reason,
+                               dropped=failed, projection=projection)
+        flags = [_SINGULAR if flag else _REGULAR for flag in singular]
+        reference = seed
+        slack = tolerance / lever
+        if copies:
+            blocks = [(np.array(self._copies(q, reference, True, slack)).reshape(-1, 6),
+                       error, flag)
+                      for q, error, flag in zip(roots, errors, flags, strict=True)]
+            q_out = np.concatenate([b for b, _, _ in blocks])
+            residuals = np.concatenate([np.tile(e, (b.shape[0], 1)) for b, e, _ in blocks])
+            out_flags = [f for b, _, f in blocks for _ in range(b.shape[0])]
+            q_out, residuals, out_flags = self._onto_limits(q_out, residuals, out_flags, chain,
+                                                            tip_target, tolerance, lever)
+        else:
+            from dhkin.ik.compiled.general6r import nearest_copies
+
+            found = roots.shape[0]
+            q_out, residuals = np.empty((found, 6)), np.empty((found, 2))
+            kept = np.empty(found, np.int64)
+            count = nearest_copies(chain, tip_target, roots, errors, found, reference,
+                                   self.table.lower, self.table.upper, slack,
+                                   self.verification_tolerance(tolerance, lever), q_out,
+                                   residuals, kept)
+            q_out, residuals = q_out[:count], residuals[:count]
+            out_flags = [flags[k] for k in kept[:count].tolist()]
+        if q_out.shape[0] == 0:
+            return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
+                               dropped=failed,
+                               reason=f"{roots.shape[0]} solution(s) verified, but no 2pi copy "
+                                      "of any lies within the joint limits")
+        turns = np.rint(q_out / TWO_PI).astype(np.int64).tolist()
+        configurations = tuple(self._configuration(tuple(t)) for t in turns)
+        return IKSolutions(q=q_out, configurations=configurations, flags=tuple(out_flags),
+                           residuals=residuals, family=self.family, dropped=failed,
+                           projection=projection)
+
+    def _seed_members(self, roots: NDArray[np.float64], errors: NDArray[np.float64],
+                      singular: NDArray[np.bool_], seed: NDArray[np.float64],
+                      chain: NDArray[np.float64], tip_target: NDArray[np.float64],
+                      tolerance: float, lever: float) -> None:
+        """The seed's choice where a joint is free, in place: each singular root moves along
+        the solutions towards the seed, as the families' seeded candidate does (the member of
+        the solution family nearest the seed, docs/ik_core.md): steps along the Jacobian's
+        weak directions (singular values within :func:`singular_band`) by the seed's offset
+        projected onto them, at most MAX_JOINT_STEP per joint, each refined by Newton on the
+        exact chain and kept while it verifies and comes nearer the seed (at most
+        :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of solutions)
+        Newton returns to the root and nothing moves."""
+        from dhkin.ik.compiled.chain import MAX_JOINT_STEP, _jacobian, check, fk_frames, refine
+
+        target = np.ascontiguousarray(tip_target[:3])
+        band = singular_band(tolerance)
+        fixed = np.zeros(6, np.bool_)
+        state = np.empty(12)
+        frames = np.empty((7, 12))
+        J = np.empty((6, 6))
+        for index in np.flatnonzero(singular):
+            q = roots[index].copy()
+            distance = float(np.sum(_wrap(q - seed) ** 2))
+            for _ in range(SEED_STEPS):
+                fk_frames(chain, q, frames)
+                _jacobian(chain, frames, J)
+                J[:3] /= lever
+                _, sigma, Vt = np.linalg.svd(J)
+                weak = Vt[sigma <= band]
+                step = weak.T @ (weak @ _wrap(seed - q))
+                longest = float(np.max(np.abs(step)))
+                if longest <= 0.0:
+                    break
+                if longest > MAX_JOINT_STEP:
+                    step *= MAX_JOINT_STEP / longest
+                trial = np.ascontiguousarray(q + step)
+                refine(chain, target, trial, fixed, tolerance)
+                position, rotation = check(chain, trial, target, state)
+                trial_distance = float(np.sum(_wrap(trial - seed) ** 2))
+                if not (position <= tolerance and rotation <= tolerance
+                        and trial_distance < distance):
+                    break
+                q, distance = _wrap(trial), trial_distance
+                errors[index] = position, rotation
+            roots[index] = q
+
+    def solve_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
+                    tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                    copies: bool = False, chunk_size: int = 65536,
+                    workers: int | None = None) -> IKBatch:
+        """:meth:`solve_one` pose by pose (a loop: ``chunk_size`` and ``workers`` are accepted
+        for the families' signature and checked, but do not apply), padded to the largest
+        count; ``q_seed`` (6,) or (N, 6). ``branch`` is 0 for every solution (the general
+        solver has one branch label set, empty: its roots have no family labels)."""
+        from dhkin.ik.inputs import _check_chunk
+        from dhkin.ik.workers import check_workers
+
+        tolerance = check_tolerance(tolerance)
+        _check_chunk(chunk_size)
+        check_workers(workers)
+        targets, _ = as_targets(T)
+        n_poses = targets.shape[0]
+        seeds: list[NDArray[np.float64] | None]
+        if q_seed is None:
+            seeds = [None] * n_poses
+        else:
+            array = np.asarray(q_seed, dtype=float)
+            if array.shape == (6,):
+                array = array[None]
+            if array.shape not in ((1, 6), (n_poses, 6)) or not np.all(np.isfinite(array)):
+                raise InputError(f"q_seed: expected finite values of shape (6,) or "
+                                 f"({n_poses}, 6), got shape {np.shape(q_seed)}",
+                                 field="q_seed")
+            seeds = [array[0]] * n_poses if array.shape[0] == 1 else list(array)
+        tip = self._tip(tcp)
+        results = []
+        for index in range(n_poses):
+            target, projection = self._pose(targets[index], f"T[{index}]")
+            results.append(self._solve(target, projection, seeds[index], tolerance, tip,
+                                       copies))
+        width = max([len(r) for r in results], default=0)
+        q = np.zeros((n_poses, width, 6))
+        valid = np.zeros((n_poses, width), np.bool_)
+        flags = np.zeros((n_poses, width), np.uint8)
+        branch = np.full((n_poses, width), -1, np.int16)
+        residuals = np.zeros((n_poses, width, 2))
+        bits = {name: bit for bit, name in FLAG_NAMES.items()}
+        for index, result in enumerate(results):
+            count = len(result)
+            q[index, :count] = result.q
+            valid[index, :count] = True
+            branch[index, :count] = 0
+            residuals[index, :count] = result.residuals
+            for slot, names in enumerate(result.flags):
+                flags[index, slot] = sum(bits[name] for name in names)
+        return IKBatch(q=q, valid=valid, flags=flags, branch=branch,
+                       branch_labels=self.branch_labels, family=self.family,
+                       residuals=residuals,
+                       projection=np.array([r.projection for r in results]),
+                       dropped=np.array([r.dropped for r in results], np.int64))
+
+    def _configuration(self, turns: tuple[int, ...]) -> Configuration:
+        found = self._configurations.get(turns)
+        if found is None:
+            found = Configuration(labels=self.branch_labels[0], turns=turns)
+            self._configurations[turns] = found
+        return found
+
+    def _nearest_copies(self, roots: NDArray[np.float64], reference: NDArray[np.float64],
+                        slack: float) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Per root, per joint the 2pi copy nearest ``reference`` within the limits widened by
+        ``slack``, and whether every joint has one."""
+        lower, upper = self.table.lower - slack, self.table.upper + slack
+        q = roots + TWO_PI * np.rint((reference - roots) / TWO_PI)
+        q = np.where(q < lower, q + TWO_PI * np.ceil((lower - q) / TWO_PI), q)
+        q = np.where(q > upper, q - TWO_PI * np.ceil((q - upper) / TWO_PI), q)
+        inside: NDArray[np.bool_] = np.all((q >= lower) & (q <= upper), axis=1)
+        return q, inside
+
+    def _copies(self, q: NDArray[np.float64], reference: NDArray[np.float64],
+                every: bool, slack: float) -> list[NDArray[np.float64]]:
+        """The 2pi copies of q within the limits widened by ``slack``: the one nearest
+        ``reference`` (per joint), or all."""
+        lower, upper = self.table.lower - slack, self.table.upper + slack
+        options = []
+        for j in range(6):
+            first = math.ceil((lower[j] - q[j]) / TWO_PI)
+            last = math.floor((upper[j] - q[j]) / TWO_PI)
+            values = [q[j] + TWO_PI * n for n in range(first, last + 1)]
+            if not values:
+                return []
+            if not every:
+                values = [values[int(np.argmin(np.abs(np.array(values) - reference[j])))]]
+            options.append(values)
+        grid = np.array(np.meshgrid(*options, indexing="ij")).reshape(6, -1).T
+        return list(grid)
+
+    def _onto_limits(self, q: NDArray[np.float64], residuals: NDArray[np.float64],
+                     flags: list[frozenset[str]], chain: NDArray[np.float64],
+                     tip_target: NDArray[np.float64], tolerance: float, lever: float
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], list[frozenset[str]]]:
+        """As in the families (docs/ik_core.md, "limits"): a value within tolerance / lever
+        outside a joint limit counts as on it: it is set onto the limit and verified again
+        (dropped if it no longer verifies)."""
+        clipped = np.clip(q, self.table.lower, self.table.upper)
+        moved = np.flatnonzero(np.any(clipped != q, axis=1))
+        if moved.size == 0:
+            return q, residuals, flags
+        from dhkin.ik.compiled.chain import check
+
+        verify = self.verification_tolerance(tolerance, lever)
+        target = np.ascontiguousarray(tip_target[:3])
+        state = np.empty(12)
+        keep = np.ones(q.shape[0], np.bool_)
+        residuals = residuals.copy()
+        for row in moved:
+            position, rotation = check(chain, np.ascontiguousarray(clipped[row]), target, state)
+            keep[row] = position <= verify and rotation <= verify
+            residuals[row] = position, rotation
+        return (clipped[keep], residuals[keep],
+                [f for f, k in zip(flags, keep, strict=True) if k])
+
+
+_REGULAR: frozenset[str] = frozenset()
+_SINGULAR: frozenset[str] = frozenset({"singular"})
+
+
+def _frames_at_zero(pre: NDArray[np.float64]) -> NDArray[np.float64]:
+    out = np.empty((7, 4, 4))
+    current = np.eye(4)
+    for j in range(7):
+        current = current @ pre[j]
+        out[j] = current
+    return out
+
+
+def _wrap(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Angles wrapped to (-pi, pi]."""
+    return np.asarray(-((-q + math.pi) % TWO_PI - math.pi))
+
+
+def _ratio_angle(m: NDArray[np.float64], axis: int) -> float:
+    """The angle whose half-angle tangent is the ratio of consecutive monomials along ``axis``
+    of m (4, 3) ~ x4^i x5^j: 2 atan2(next, this) on the pair of largest size."""
+    pairs = (m[:-1, :], m[1:, :]) if axis == 0 else (m[:, :-1], m[:, 1:])
+    size = pairs[0] ** 2 + pairs[1] ** 2
+    index = np.unravel_index(int(np.argmax(size)), size.shape)
+    return 2.0 * math.atan2(float(pairs[1][index]), float(pairs[0][index]))
+
+
+def choose_arrangement(solver: General6RSolver, poses: int = 12) -> Arrangement:
+    """The arrangement whose matrix polynomial is regular and which recovers the most sample
+    solutions (joint vectors drawn with a fixed seed; FK gives their poses) on the exact chain,
+    ties broken by the polynomial's conditioning."""
+    rng = np.random.default_rng(16)
+    samples = rng.uniform(-math.pi, math.pi, size=(poses, 6))
+    targets = [_inverse(solver.table.base) @ solver.table.fk(q) @ _inverse(solver.table.tool)
+               for q in samples]
+    best: tuple[float, float] | None = None
+    choice: Arrangement | None = None
+    for reversed_ in (False, True):
+        for k in (1, 2, 0):
+            arrangement = Arrangement(reversed_, k)
+            _, el = solver._eliminator(arrangement)
+            regular = _regularity(solver, el, targets[0], arrangement)
+            if regular < SINGULAR_PENCIL:
+                continue
+            recovered = 0
+            for q, T_dh in zip(samples, targets, strict=True):
+                cands = solver.candidates(T_dh, arrangement, el)
+                if cands.shape[0] and np.min(np.max(np.abs(_wrap(cands - q)), axis=1)) < 1e-6:
+                    recovered += 1
+            score = (recovered, regular)
+            if best is None or score > best:
+                best, choice = score, arrangement
+    if choice is None:
+        raise FamilyError(f"{solver.table.name}: every elimination's matrix polynomial is "
+                          "singular")
+    return choice
+
+
+def _regularity(solver: General6RSolver, el: Elimination, T_dh: NDArray[np.float64],
+                arrangement: Arrangement) -> float:
+    """Smallest singular value of M(x3) over its norm at two generic x3."""
+    model = el.model
+    target = _inverse(T_dh) if arrangement.reversed else T_dh
+    H = _inverse(model.D0) @ target @ _inverse(model.E)
+    H[:3, 3] /= model.scale
+    A, B, C, _, _ = el.pencil(H)
+    values = []
+    for x in (0.7, -1.3):
+        M = A * x * x + B * x + C
+        s = np.linalg.svd(M, compute_uv=False)
+        values.append(s[-1] / s[0])
+    return float(min(values))

@@ -1,0 +1,245 @@
+"""The general 6R solver (dhkin.ik.general6r): every solution of arms outside the families.
+
+Targets come from Pinocchio on the generated URDF (the oracle); every returned solution is
+checked there at the verification tolerance. Sizes are CI-friendly; scripts/check_general6r.py
+runs the issue's full sizes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import dhkin
+from dhkin.dh import DHTable, Joint
+from dhkin.ik.general6r import General6RSolver, _wrap
+from dhkin.robot import Robot
+from dhkin.tolerances import DEFAULT_TOLERANCE
+
+SPECIAL = np.array([0.0, math.pi / 2, -math.pi / 2, math.pi])
+
+
+def ur5_tilted() -> Robot:
+    """The UR5 with joint 2's alpha tilted by 10 degrees (no family fits)."""
+    table = dhkin.load("ur5").table
+    joints = list(table.joints)
+    joints[1] = replace(joints[1], alpha=joints[1].alpha + math.radians(10.0))
+    return Robot(replace(table, name="ur5_tilted", joints=tuple(joints)))
+
+
+def random_table(rng: np.random.Generator, index: int) -> DHTable:
+    """A random 6R table: lengths 0.05-1 m, alphas uniform, offsets random, limits +-2pi."""
+    joints = tuple(Joint(name=f"joint_{i + 1}", link=f"link_{i + 1}", type="revolute",
+                         a=rng.uniform(0.05, 1.0), alpha=rng.uniform(-math.pi, math.pi),
+                         d=rng.uniform(0.05, 1.0) * rng.choice([-1.0, 1.0]), theta=0.0,
+                         offset=rng.uniform(-math.pi, math.pi), direction=1,
+                         lower=-2 * math.pi, upper=2 * math.pi, velocity=1.0, effort=1.0)
+                   for i in range(6))
+    return DHTable(name=f"random_{index}", convention="standard", joints=joints)
+
+
+def pose_errors(T: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (m) and rotation angle (rad) of T against targets, (N,) each."""
+    position = np.linalg.norm(T[:, :3, 3] - targets[:, :3, 3], axis=1)
+    E = np.einsum("nji,njk->nik", T[:, :3, :3], targets[:, :3, :3])
+    cos = np.clip((np.trace(E, axis1=1, axis2=2) - 1) / 2, -1, 1)
+    skew = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0],
+                     E[:, 1, 0] - E[:, 0, 1]], axis=1)
+    return position, np.arctan2(np.linalg.norm(skew, axis=1) / 2, cos)
+
+
+def run(robot: Robot, Q: np.ndarray, seeded: bool = True) -> tuple[int, float, int]:
+    """Solve the Pinocchio poses of Q: (poses whose q came back, worst oracle error, total
+    solutions); asserts every solution verifies on the oracle."""
+    solver = General6RSolver(robot.table)
+    reference = robot.reference()
+    targets = reference.fk(Q)
+    recovered, worst, total = 0, 0.0, 0
+    for q, T in zip(Q, targets, strict=True):
+        result = solver.solve_one(T, q if seeded else None)
+        total += len(result)
+        if len(result) == 0:
+            continue
+        position, rotation = pose_errors(reference.fk(result.q), np.repeat(T[None], len(result),
+                                                                            axis=0))
+        worst = max(worst, float(position.max()), float(rotation.max()))
+        if np.min(np.max(np.abs(_wrap(result.q - q)), axis=1)) < 1e-6:
+            recovered += 1
+    return recovered, worst, total
+
+
+@pytest.mark.parametrize("name", ["fanuc_crx10ia", "xarm6", "ur5_tilted"])
+def test_arms_outside_the_families(name: str) -> None:
+    robot = ur5_tilted() if name == "ur5_tilted" else dhkin.load(name)
+    Q = robot.table.random_q(300, np.random.default_rng(16))
+    # unseeded: a seed near the pose is a Newton start and would return q by itself
+    recovered, worst, _ = run(robot, Q, seeded=False)
+    assert worst <= DEFAULT_TOLERANCE
+    assert recovered == len(Q)
+
+
+@pytest.mark.parametrize("name", ["fanuc_crx10ia", "xarm6", "ur5_tilted"])
+def test_special_angles_give_no_wrong_solution(name: str) -> None:
+    robot = ur5_tilted() if name == "ur5_tilted" else dhkin.load(name)
+    rng = np.random.default_rng(17)
+    Q = SPECIAL[rng.integers(0, 4, size=(100, 6))]
+    Q = np.clip(Q, robot.lower, robot.upper)
+    _, worst, _ = run(robot, Q, seeded=False)
+    assert worst <= DEFAULT_TOLERANCE
+
+
+def test_random_tables_counts_even_and_complete() -> None:
+    rng = np.random.default_rng(1616)
+    for index in range(8):
+        table = random_table(rng, index)
+        solver = General6RSolver(table)
+        Q = rng.uniform(-math.pi, math.pi, size=(40, 6))
+        for q in Q:
+            T_dh = solver.target_dh(table.fk(q))
+            roots, _, _ = solver.roots(T_dh, None, DEFAULT_TOLERANCE)
+            assert roots.shape[0] % 2 == 0 and roots.shape[0] <= 16
+            assert np.min(np.max(np.abs(_wrap(roots - q)), axis=1)) < 1e-6
+        recovered, worst, _ = run(Robot(table), Q[:20], seeded=False)
+        assert worst <= DEFAULT_TOLERANCE and recovered == 20
+
+
+@pytest.mark.parametrize("name", ["ur5", "abb_irb1200_7_70"])
+def test_same_solutions_as_the_family_solver(name: str) -> None:
+    robot = dhkin.load(name)
+    solver = General6RSolver(robot.table)
+    Q = robot.table.random_q(200, np.random.default_rng(18))
+    for q, T in zip(Q, robot.fk(Q), strict=True):
+        family = robot.ik(T, q)
+        general = solver.solve_one(T, q)
+        assert len(family) == len(general)
+        a = np.array(sorted(map(tuple, np.round(_wrap(family.q), 6))))
+        b = np.array(sorted(map(tuple, np.round(_wrap(general.q), 6))))
+        assert np.max(np.abs(_wrap(a - b))) < 1e-5
+
+
+# --------------------------------------------------------------------------------------------
+# robot.ik: the general solver answers six-revolute arms without a family
+
+
+def test_robot_ik_uses_the_general_solver() -> None:
+    """CRX-10iA and xArm6 (no family): robot.ik, ik_batch and ik_batch_detailed answer with
+    every solution (family "general6r", not numerical), the same pose by pose; rounded
+    rotations are projected; a TCP is verified at the TCP; bad inputs raise InputError."""
+    from dhkin.errors import InputError
+
+    for name in ("fanuc_crx10ia", "xarm6"):
+        robot = dhkin.load(name)
+        assert robot.ik_family == "general6r" and robot.complete_ik and not robot.has_closed_form
+        Q = robot.table.random_q(5, np.random.default_rng(19))
+        targets = robot.fk(Q)
+        batch = robot.ik_batch_detailed(targets, Q)
+        for k, (q, T) in enumerate(zip(Q, targets, strict=True)):
+            result = robot.ik(T, q)
+            assert result.family == "general6r" and not result.numerical and len(result) >= 2
+            assert np.abs(result.nearest(q) - q).max() <= 1e-6
+            assert np.array_equal(batch.q[k, batch.valid[k]], result.q)
+            rounded = np.round(T, 6)
+            projected = robot.ik(rounded, q)
+            assert projected.projection > 0 and len(projected) > 0
+        tcp = np.eye(4)
+        tcp[:3, 3] = [0.05, -0.02, 0.3]
+        q = Q[0]
+        result = robot.ik(robot.fk(q) @ tcp, q, tcp=tcp)
+        position, rotation = pose_errors(robot.reference().fk(result.q) @ tcp,
+                                         np.repeat((robot.fk(q) @ tcp)[None], len(result), 0))
+        assert max(position.max(), rotation.max()) <= DEFAULT_TOLERANCE
+        with pytest.raises(InputError, match="bottom row"):
+            robot.ik(np.zeros((4, 4)))
+        with pytest.raises(InputError, match="q_seed"):
+            robot.ik(robot.fk(q), [0.0] * 5)
+    far = np.eye(4)
+    far[:3, 3] = [5.0, 0.0, 0.0]
+    empty = dhkin.load("xarm6").ik(far)
+    assert len(empty) == 0 and "no real solution" in empty.reason
+
+
+def _fold(robot: Robot, sigma: float) -> np.ndarray:
+    """A joint vector of the CRX-10iA whose Jacobian's scaled smallest singular value is
+    ``sigma`` (joint 2 moved towards a fold by bisection)."""
+    from dhkin.ik.compiled.general6r import smallest_singular
+
+    solver = robot.general_solver
+    assert solver is not None
+
+    def measure(value: float) -> float:
+        q = np.array([0.3, value, 1.1, 0.2, 0.8, -0.5])
+        return float(smallest_singular(solver.tip_chain, q, solver.tip_lever, np.inf))
+
+    low, high = -0.2285349, 0.0  # the fold (sigma 0) lies at q2 = -0.228535 (measured)
+    assert measure(low) < sigma < measure(high)
+    for _ in range(80):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if measure(middle) < sigma else (low, middle)
+    return np.array([0.3, high, 1.1, 0.2, 0.8, -0.5])
+
+
+@pytest.mark.parametrize("factor", [0.8, 1.25])
+def test_singular_flag_at_the_edge_of_its_band(factor: float) -> None:
+    """A root is flagged "singular" exactly when its Jacobian's smallest singular value is
+    within the band sqrt(tolerance) (dhkin.ik.general6r.singular_band): at 0.8 and 1.25 times
+    the band, near a fold of the CRX-10iA."""
+    from dhkin.ik.general6r import singular_band
+
+    robot = dhkin.load("fanuc_crx10ia")
+    q = _fold(robot, factor * singular_band(DEFAULT_TOLERANCE))
+    result = robot.ik(robot.fk(q), q)
+    nearest = int(np.argmin(np.abs(_wrap(result.q - q)).max(axis=1)))
+    assert np.abs(result.q[nearest] - q).max() <= 1e-6
+    assert ("singular" in result.flags[nearest]) == (factor < 1.0)
+
+
+def _free_pose(robot: Robot, start: np.ndarray) -> np.ndarray:
+    """Joint values where axis 6 lies on axis 1 (q1 and q6 then move one rotation): found by
+    least squares on joints 2-5 (fixed seed)."""
+    import scipy.optimize
+
+    from dhkin.ik.compiled.chain import fk_frames
+
+    solver = robot.general_solver
+    assert solver is not None
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        frames = np.empty((7, 12))
+        fk_frames(solver.tip_chain, np.array([start[0], *x, start[5]]), frames)
+        z1, o1 = frames[0, [2, 6, 10]], frames[0, [3, 7, 11]]
+        z6, o6 = frames[5, [2, 6, 10]], frames[5, [3, 7, 11]]
+        return np.concatenate([np.cross(z1, z6), np.cross(o6 - o1, z1)])
+
+    fit = scipy.optimize.least_squares(residual, start[1:5], xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    q = np.array([start[0], *fit.x, start[5]])
+    assert fit.cost < 1e-28 and robot.table.in_limits(q[None])[0]
+    return q
+
+
+@pytest.mark.parametrize(("name", "start"), [
+    ("fanuc_crx10ia", [0.3, 0.2, 1.9, 1.5, 0.1, -0.5]),
+    ("xarm6", [0.3, 0.4, 0.1, 0.1, 2.7, -0.5]),
+])
+def test_a_free_joint_follows_the_seed(name: str, start: list[float]) -> None:
+    """Axis 6 on axis 1: only q1 -/+ q6 is determined. The answer nearest the seed is the
+    member of that family nearest the seed (q1 and q6 each move by half the seed's offset on
+    q1, one way or the other), exact and flagged "singular", continuous in the seed."""
+    robot = dhkin.load(name)
+    q = _free_pose(robot, np.array(start))
+    T = robot.fk(q)
+    for shift in (0.0, 0.2, -0.3, 0.25):
+        seed = q.copy()
+        seed[0] += shift
+        result = robot.ik(T, seed)
+        nearest = int(np.argmin(np.linalg.norm(result.q - seed, axis=1)))
+        chosen = result.q[nearest]
+        assert "singular" in result.flags[nearest]
+        assert chosen[0] - q[0] == pytest.approx(shift / 2, abs=1e-9)
+        assert abs(chosen[5] - q[5]) == pytest.approx(abs(shift) / 2, abs=1e-9)
+        assert np.abs(chosen[1:5] - q[1:5]).max() <= 1e-9
+        position, rotation = pose_errors(robot.reference().fk(result.q),
+                                         np.repeat(T[None], len(result), axis=0))
+        assert max(position.max(), rotation.max()) <= DEFAULT_TOLERANCE

@@ -169,10 +169,10 @@ def test_hostile_text_goes_through_export_and_every_validator(index: int, tmp_pa
     assert model.existFrame(EDGE_NAMES["link"])
 
 
-def test_numerical_ik_with_the_measured_description(tmp_path: Path) -> None:
+def test_ik_with_the_measured_description(tmp_path: Path) -> None:
     """The case measured on main: the UR5 with joint 3's axis tilted by 10 degrees (no closed
-    form) and a description with '--'. robot.ik falls back on the numerical IK of the generated
-    URDF and returns solutions that Pinocchio verifies."""
+    form of a family) and a description with '--'. robot.ik answers with the general 6R solver
+    and returns solutions that Pinocchio verifies on the generated URDF."""
     data = table_data(name="ur5_tilted", description=MEASURED, source=HOSTILE_TEXTS[1])
     data["joints"][2]["alpha"] = 10
     robot = dhkin.load(write_table(tmp_path, data))
@@ -181,7 +181,7 @@ def test_numerical_ik_with_the_measured_description(tmp_path: Path) -> None:
     for row in q:
         target = robot.fk(row)
         solutions = robot.ik(target, q_seed=row + 0.05)
-        assert solutions.numerical and len(solutions) >= 1
+        assert solutions.family == "general6r" and len(solutions) >= 1
         position, rotation = pose_error(robot.reference().fk(solutions.q),
                                         np.broadcast_to(target, (len(solutions), 4, 4)))
         assert position.max() <= DEFAULT_TOLERANCE and rotation.max() <= DEFAULT_TOLERANCE

@@ -431,9 +431,11 @@ class General6RSolver:
         the solution family nearest the seed, docs/ik_core.md): steps along the Jacobian's
         weak directions (singular values within :func:`singular_band`) by the seed's offset
         projected onto them, at most MAX_JOINT_STEP per joint, each refined by Newton on the
-        exact chain and kept while it verifies and comes nearer the seed (at most
-        :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of solutions)
-        Newton returns to the root and nothing moves."""
+        exact chain and kept while it verifies, comes nearer the seed and stays on the same
+        root (the midpoint of the step verifies too: the rule by which candidates are merged)
+        (at most :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of
+        solutions) Newton returns to the root, or lands on another root (near a fold: the
+        midpoint does not verify), and nothing moves."""
         from dhkin.ik.compiled.chain import MAX_JOINT_STEP, _jacobian, check, fk_frames, refine
 
         target = np.ascontiguousarray(tip_target[:3])
@@ -463,6 +465,12 @@ class General6RSolver:
                 trial_distance = float(np.sum(_wrap(trial - seed) ** 2))
                 if not (position <= tolerance and rotation <= tolerance
                         and trial_distance < distance):
+                    break
+                # the step stays on this root (their midpoint verifies too, the merging rule):
+                # near a fold Newton can land on a distinct root nearer the seed instead
+                middle = np.ascontiguousarray(q + 0.5 * _wrap(trial - q))
+                between = check(chain, middle, target, state)
+                if not (between[0] <= tolerance and between[1] <= tolerance):
                     break
                 q, distance = _wrap(trial), trial_distance
                 errors[index] = position, rotation

@@ -582,10 +582,13 @@ class General6RSolver:
             seeds = [array[0]] * n_poses if array.shape[0] == 1 else list(array)
         tip = self._tip(tcp)
         results = []
+        fast = tcp is None and copies is False
         for index in range(n_poses):
-            target, projection = self._pose(targets[index], f"T[{index}]")
-            results.append(self._solve(target, projection, seeds[index], tolerance, tip,
-                                       copies))
+            result = self._solve_fast(targets[index], seeds[index], tolerance) if fast else None
+            if result is None:
+                target, projection = self._pose(targets[index], f"T[{index}]")
+                result = self._solve(target, projection, seeds[index], tolerance, tip, copies)
+            results.append(result)
         width = max([len(r) for r in results], default=0)
         q = np.zeros((n_poses, width, 6))
         valid = np.zeros((n_poses, width), np.bool_)

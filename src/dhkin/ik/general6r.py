@@ -22,9 +22,13 @@ TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
 
 from __future__ import annotations
 
+import functools
 import math
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -119,6 +123,9 @@ class General6RSolver:
         self._data = self.kernel_data()
         self._configurations: dict[tuple[int, ...], Configuration] = {}
         self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
+        self._zero_seed = np.zeros(6)
+        self._buffers = threading.local()
+        self._fast_constants: dict[float, tuple[Any, ...]] = {}
 
     def kernel_data(self, arrangement: Arrangement | None = None,
                     elimination: Elimination | None = None) -> tuple[NDArray[np.float64], ...]:
@@ -360,10 +367,79 @@ class General6RSolver:
         nearest ``q_seed`` (nearest 0 without one), or every copy with ``copies``. Inputs are
         checked as by the families (:class:`dhkin.ik.solver.ClosedFormSolver`); solutions are
         verified by FK at the TCP (tool0, or ``tcp``)."""
+        if tcp is None and copies is False:
+            fast = self._solve_fast(T, q_seed, tolerance)
+            if fast is not None:
+                return fast
         tolerance = check_tolerance(tolerance)
         target, projection = self._pose(T, "T")
         return self._solve(target, projection, self._seed(q_seed), tolerance, self._tip(tcp),
                            copies)
+
+    def _solve_fast(self, T: ArrayLike, q_seed: ArrayLike | None,
+                    tolerance: float) -> IKSolutions | None:
+        """:meth:`solve_one` without ``tcp`` or copies in one compiled call
+        (:func:`dhkin.ik.compiled.general6r.solve_pose`, the same steps as :meth:`_solve`),
+        or None where the Python path must answer (an input to reject, a singular root, no
+        solution)."""
+        tolerance = check_tolerance(tolerance)
+        try:
+            target = np.ascontiguousarray(T, dtype=np.float64)
+            seed = (self._zero_seed if q_seed is None
+                    else np.ascontiguousarray(q_seed, dtype=np.float64))
+        except (TypeError, ValueError):
+            return None
+        if target.shape != (4, 4) or seed.shape != (6,):
+            return None
+        constants = self._fast_constants.get(tolerance)
+        if constants is None:
+            verify = self.verification_tolerance(tolerance, self.tip_lever)
+            constants = (verify, self.tip_lever, singular_band(verify), self.table.lower,
+                         self.table.upper, tolerance / self.tip_lever)
+            self._fast_constants[tolerance] = constants
+        try:
+            buffers = self._buffers.arrays
+        except AttributeError:
+            buffers = self._fast_buffers()
+        count = self._fast_kernel(*self._data, self._base_inverse, self._tool_inverse,
+                                  self.tip_chain, target, seed, *constants, *buffers)
+        if count < 0:
+            return None
+        from dhkin.ik.compiled.general6r import FAILED, PROJECTION
+
+        out_q, out_errors, info = buffers[4], buffers[5], buffers[7]
+        q = out_q[:count].copy()
+        turns = np.rint(q * (1.0 / TWO_PI)).astype(np.int64).tolist()
+        return IKSolutions(q=q, configurations=tuple(map(self._configuration,
+                                                         map(tuple, turns))),
+                           flags=(_REGULAR,) * count, residuals=out_errors[:count].copy(),
+                           family=self.family, dropped=int(info[FAILED]),
+                           projection=float(info[PROJECTION]))
+
+    def _fast_buffers(self) -> tuple[NDArray[Any], ...]:
+        """Per-thread work arrays of :func:`dhkin.ik.compiled.general6r.solve_pose`: starts,
+        roots, errors, sigmas, out_q, out_errors, kept, info."""
+        from dhkin.ik.compiled.general6r import MAX_CANDIDATES
+
+        n = MAX_CANDIDATES
+        arrays = (np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 2)), np.empty(n),
+                  np.empty((n, 6)), np.empty((n, 2)), np.empty(n, np.int64), np.empty(2))
+        self._buffers.arrays = arrays
+        return arrays
+
+    @functools.cached_property
+    def _fast_kernel(self) -> Callable[..., int]:
+        """:func:`dhkin.ik.compiled.general6r.solve_pose`'s compiled entry point for this
+        solver's argument types (numba's per-call type resolution skipped, as in the
+        families' :meth:`dhkin.ik.solver.ClosedFormSolver._entry_point`)."""
+        from dhkin.ik.compiled.general6r import solve_pose
+        from dhkin.ik.solver import _compiled
+
+        args = (*self._data, self._base_inverse, self._tool_inverse, self.tip_chain,
+                np.eye(4), self._zero_seed, DEFAULT_TOLERANCE, 1.0, 1.0, self.table.lower,
+                self.table.upper, 1.0, *self._fast_buffers())
+        kernel: Callable[..., int] = _compiled(solve_pose, args, None)
+        return kernel
 
     def _solve(self, target: NDArray[np.float64], projection: float,
                seed: NDArray[np.float64] | None, tolerance: float,
@@ -431,9 +507,11 @@ class General6RSolver:
         the solution family nearest the seed, docs/ik_core.md): steps along the Jacobian's
         weak directions (singular values within :func:`singular_band`) by the seed's offset
         projected onto them, at most MAX_JOINT_STEP per joint, each refined by Newton on the
-        exact chain and kept while it verifies and comes nearer the seed (at most
-        :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of solutions)
-        Newton returns to the root and nothing moves."""
+        exact chain and kept while it verifies, comes nearer the seed and stays on the same
+        root (the midpoint of the step verifies too: the rule by which candidates are merged)
+        (at most :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of
+        solutions) Newton returns to the root, or lands on another root (near a fold: the
+        midpoint does not verify), and nothing moves."""
         from dhkin.ik.compiled.chain import MAX_JOINT_STEP, _jacobian, check, fk_frames, refine
 
         target = np.ascontiguousarray(tip_target[:3])
@@ -463,6 +541,12 @@ class General6RSolver:
                 trial_distance = float(np.sum(_wrap(trial - seed) ** 2))
                 if not (position <= tolerance and rotation <= tolerance
                         and trial_distance < distance):
+                    break
+                # the step stays on this root (their midpoint verifies too, the merging rule):
+                # near a fold Newton can land on a distinct root nearer the seed instead
+                middle = np.ascontiguousarray(q + 0.5 * _wrap(trial - q))
+                between = check(chain, middle, target, state)
+                if not (between[0] <= tolerance and between[1] <= tolerance):
                     break
                 q, distance = _wrap(trial), trial_distance
                 errors[index] = position, rotation
@@ -498,10 +582,13 @@ class General6RSolver:
             seeds = [array[0]] * n_poses if array.shape[0] == 1 else list(array)
         tip = self._tip(tcp)
         results = []
+        fast = tcp is None and copies is False
         for index in range(n_poses):
-            target, projection = self._pose(targets[index], f"T[{index}]")
-            results.append(self._solve(target, projection, seeds[index], tolerance, tip,
-                                       copies))
+            result = self._solve_fast(targets[index], seeds[index], tolerance) if fast else None
+            if result is None:
+                target, projection = self._pose(targets[index], f"T[{index}]")
+                result = self._solve(target, projection, seeds[index], tolerance, tip, copies)
+            results.append(result)
         width = max([len(r) for r in results], default=0)
         q = np.zeros((n_poses, width, 6))
         valid = np.zeros((n_poses, width), np.bool_)

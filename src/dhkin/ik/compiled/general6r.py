@@ -27,6 +27,7 @@ from dhkin.ik.compiled.chain import (
     refine,
 )
 from dhkin.ik.compiled.jit import jit
+from dhkin.ik.compiled.pose import project, status
 
 ensure_lapack()
 _rgeev = _LAPACK().numba_ez_rgeev(types.float64)
@@ -515,3 +516,62 @@ def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
         kept[count] = k
         count += 1
     return count
+
+
+#: Layout of :func:`solve_pose`'s ``info``: the pose's projection, candidates that did not
+#: verify.
+PROJECTION, FAILED = 0, 1
+
+
+@jit
+def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
+               after: NDArray[np.float64], inv_right: NDArray[np.float64],
+               mix: NDArray[np.float64], half2: NDArray[np.float64], rows: NDArray[np.float64],
+               phi: NDArray[np.float64], D0_inverse: NDArray[np.float64],
+               E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
+               direction: NDArray[np.float64], offset: NDArray[np.float64],
+               base_inverse: NDArray[np.float64], tool_inverse: NDArray[np.float64],
+               chain: NDArray[np.float64], T: NDArray[np.float64], seed: NDArray[np.float64],
+               tolerance: float, lever: float, band: float, lower: NDArray[np.float64],
+               upper: NDArray[np.float64], slack: float, starts: NDArray[np.float64],
+               roots: NDArray[np.float64], errors: NDArray[np.float64],
+               sigmas: NDArray[np.float64], out_q: NDArray[np.float64],
+               out_errors: NDArray[np.float64], kept: NDArray[np.int64],
+               info: NDArray[np.float64]) -> int:
+    """The general solver's single call in one kernel, for the common case (the Python path,
+    :meth:`dhkin.ik.general6r.General6RSolver._solve`, does the same in steps): the pose T
+    (base_link -> tool0) checked (:func:`dhkin.ik.compiled.pose.status`) and projected, its
+    candidates (:func:`candidates`), refined, verified at ``tolerance`` (the verification
+    tolerance) and merged (:func:`settle`, ``seed`` the seed's start), each root's in-limit
+    copy nearest ``seed`` (:func:`nearest_copies`, ``slack``). Returns the number of rows
+    written to out_q, out_errors (all regular), or -1 where the Python path must answer: a
+    pose or seed not usable (it raises the error), a singular root or an ill-conditioned
+    eigenproblem (the seed's member of a curve of solutions), or no solution (the reason)."""
+    for j in range(6):
+        if not abs(seed[j]) < math.inf:
+            return -1
+    if status(T) != 0:
+        return -1
+    target = np.eye(4)
+    info[PROJECTION] = project(T, target[:3])
+    tip_target = base_inverse @ target
+    T_dh = tip_target @ tool_inverse
+    eigen = np.empty(2)
+    count = candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
+                       E_inverse, setup, direction, offset, T_dh, starts, eigen)
+    ill_conditioned = not eigen[0] >= LEAD_CONDITION
+    if ill_conditioned:
+        return -1
+    for j in range(6):
+        starts[count, j] = seed[j]
+    found, failed = settle(chain, tip_target, starts, count + 1, count, tolerance, lever, band,
+                           False, int(eigen[1]), roots, errors, sigmas)
+    info[FAILED] = failed
+    if found == 0:
+        return -1
+    for k in range(found):
+        if sigmas[k] <= band:
+            return -1
+    count = nearest_copies(chain, tip_target, roots, errors, found, seed, lower, upper, slack,
+                           tolerance, out_q, out_errors, kept)
+    return count if count > 0 else -1

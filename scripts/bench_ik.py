@@ -531,7 +531,8 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
     eigenproblem, back-substitution), the refinement kernel (Newton on the exact chain,
     verification, merging, the singular measure), and the Python around them (input checks,
     2pi copies, the result)."""
-    from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates, settle
+    from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
+    from dhkin.ik.compiled.general6r_roots import settle
     from dhkin.ik.general6r import singular_band
 
     solver = robot.general_solver

@@ -35,7 +35,8 @@ from test_ik_general6r import (
 )
 
 import dhkin
-from dhkin.ik.general6r import General6RSolver, _wrap
+from dhkin.ik.general6r import General6RSolver
+from dhkin.ik.general6r_arrangement import wrap as _wrap
 from dhkin.robot import Robot
 
 

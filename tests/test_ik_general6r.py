@@ -15,7 +15,8 @@ import pytest
 
 import dhkin
 from dhkin.dh import DHTable, Joint
-from dhkin.ik.general6r import General6RSolver, _wrap
+from dhkin.ik.general6r import General6RSolver
+from dhkin.ik.general6r_arrangement import wrap as _wrap
 from dhkin.robot import Robot
 from dhkin.tolerances import DEFAULT_TOLERANCE
 
@@ -228,7 +229,7 @@ def test_robot_ik_uses_the_general_solver() -> None:
 def _fold(robot: Robot, sigma: float) -> np.ndarray:
     """A joint vector of the CRX-10iA whose Jacobian's scaled smallest singular value is
     ``sigma`` (joint 2 moved towards a fold by bisection)."""
-    from dhkin.ik.compiled.general6r import smallest_singular
+    from dhkin.ik.compiled.general6r_roots import smallest_singular
 
     solver = robot.general_solver
     assert solver is not None

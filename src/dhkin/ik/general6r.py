@@ -23,70 +23,39 @@ TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
 from __future__ import annotations
 
 import functools
-import math
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
 from dhkin.errors import FamilyError, InputError
+from dhkin.ik.general6r_answer import copies as copies_within
+from dhkin.ik.general6r_answer import (
+    onto_limits,
+    seed_members,
+    singular_band,
+)
+from dhkin.ik.general6r_arrangement import (
+    IMAGINARY_BAND,
+    Arrangement,
+    candidates,
+    choose_arrangement,
+    frames_at_zero,
+)
 from dhkin.ik.general6r_elimination import Elimination
-from dhkin.ik.general6r_model import Model, _inverse, dh_row, refit
+from dhkin.ik.general6r_model import Model, _inverse, refit
 from dhkin.ik.inputs import TWO_PI, as_targets, check_tolerance, pose_error_message
 from dhkin.ik.result import FLAG_NAMES, Configuration, IKBatch, IKSolutions
 from dhkin.tolerances import DEFAULT_TOLERANCE
-
-#: A candidate angle is taken from an eigenvalue whose half-angle arc tangent's imaginary
-#: part is at most this (rad). Rounding turns a double real root (a singular pose) into a
-#: complex pair whose imaginary part is ~sqrt(rounding), ~1e-8; near a fold, two real roots
-#: 0.1 rad apart in the chain can be a complex pair of the model. Spurious eigenvalues
-#: (x3 = +-i) lie at infinite imaginary angle. Candidates are cheap (Newton decides), so the
-#: band is wide.
-IMAGINARY_BAND = 0.1
-
 
 #: The free angles eliminated first: theta_k = shift + 2 atan(x3). An angle with no special
 #: value (0, pi/2, pi), so that a pose at theta_k = shift + pi (an eigenvalue at infinity,
 #: handled by QZ anyway) is unlikely.
 SHIFT = 0.5772156649015329
-
-
-#: Singular values of the 12 x 12 matrix polynomial at a generic x3 below this fraction of
-#: its norm mean the arrangement's polynomial is singular (its determinant vanishes for
-#: every x3): rounding alone leaves ~1e-16 there, a regular one ~1e-5 or more.
-SINGULAR_PENCIL = 1e-10
-
-
-def singular_band(tolerance: float) -> float:
-    """A root is flagged "singular" when the smallest singular value sigma of its Jacobian
-    (linear rows divided by the lever, so that rad and m/lever weigh alike) is at most
-    sqrt(tolerance): a step delta along the weakest direction moves the pose by about
-    sigma delta + delta^2 / 2 (curvature ~1 per rad on the scaled chain), so with sigma <=
-    sqrt(tolerance) every point within ~sqrt(tolerance) rad of the root along that direction
-    verifies as well: at the tolerance the pose cannot be told from a singular one (a double
-    root, or a curve of solutions where a joint is free). 3.2e-5 at the default 1e-9."""
-    return math.sqrt(tolerance)
-
-
-#: The seed's member of a curve of solutions (a joint free at a singular pose) is followed by
-#: at most this many steps along the Jacobian's weak directions towards the seed, each refined
-#: back onto the solutions by Newton and kept only when it verifies and is nearer the seed.
-SEED_STEPS = 12
-
-
-@dataclass(frozen=True)
-class Arrangement:
-    """One way of eliminating: the chain's direction (``reversed``: tip to base) and the
-    eliminated joint ``k`` of the model (0-based)."""
-
-    reversed: bool
-    k: int
 
 
 class General6RSolver:
@@ -111,7 +80,7 @@ class General6RSolver:
         self._base_inverse = _inverse(table.base)
         self._tool_inverse = _inverse(table.tool)
         self.lever = max(1.0, float(np.max(np.abs(np.diff(
-            _frames_at_zero(pre)[:, :3, 3], axis=0)))))
+            frames_at_zero(pre)[:, :3, 3], axis=0)))))
         #: The exact chain to tool0 (the point verified; ``chain`` ends at DH frame 6).
         self.tip_chain = self.chain.copy()
         self.tip_chain[6, :12] = (pre[6] @ table.tool)[:3].ravel()
@@ -167,78 +136,9 @@ class General6RSolver:
     def candidates(self, T_dh: NDArray[np.float64], arrangement: Arrangement | None = None,
                    elimination: Elimination | None = None) -> NDArray[np.float64]:
         """Joint values (m, 6) of every near-real eigenvalue for the target T_dh (DH frame 0 ->
-        DH frame 6 of the exact chain), before refinement."""
-        arrangement = arrangement or self.arrangement
-        el = elimination or self.elimination
-        model = el.model
-        target = _inverse(T_dh) if arrangement.reversed else T_dh
-        H = _inverse(model.D0) @ target @ _inverse(model.E)
-        H[:3, 3] /= model.scale
-        A, B, C, Q, r = el.pencil(H)
-        n = 12
-        left = np.zeros((24, 24))
-        left[:n, n:] = np.eye(n)
-        left[n:, :n] = -C
-        left[n:, n:] = -B
-        right = np.eye(24)
-        right[n:, n:] = A
-        (alpha, beta), vectors = scipy.linalg.eig(left, right, homogeneous_eigvals=True,
-                                                  check_finite=False)
-        thetas = []
-        for index in range(24):
-            a, b = alpha[index], beta[index]
-            if not (np.isfinite(a) and np.isfinite(b)):
-                continue
-            if abs(b) > abs(a) * 1e-300 and b != 0:
-                x = a / b
-                with np.errstate(divide="ignore", invalid="ignore"):  # x = +-i: spurious
-                    angle = 2.0 * np.arctan(x)
-                if not np.isfinite(angle) or abs(angle.imag) > IMAGINARY_BAND:
-                    continue
-                theta_k = el.shift + float(angle.real)
-                vector = vectors[:n, index] if abs(x) <= 1.0 else vectors[n:, index]
-            else:
-                theta_k = el.shift + math.pi
-                vector = vectors[n:, index]
-            top = vector[int(np.argmax(np.abs(vector)))]
-            m = (vector * (np.conj(top) / abs(top))).real.reshape(4, 3)
-            theta_1 = _ratio_angle(m, axis=0)
-            theta_2 = _ratio_angle(m, axis=1)
-            thetas.append(self._back_substitute(el, H, theta_k, theta_1, theta_2, Q, r))
-        if not thetas:
-            return np.zeros((0, 6))
-        theta = np.array(thetas)
-        v = theta - model.phi
-        if arrangement.reversed:
-            v = -v[:, ::-1]
-        return (v - self.offset) / self.direction
-
-    @staticmethod
-    def _back_substitute(el: Elimination, H: NDArray[np.float64], theta_k: float,
-                         theta_1: float, theta_2: float, Q: NDArray[np.float64],
-                         r: NDArray[np.float64]) -> NDArray[np.float64]:
-        """All six model angles from the eliminated one and its two neighbours: the right
-        side's two joints from the 14 equations (least squares: Q y = P x - r), the dropped
-        joint from the orientation."""
-        k = el.k
-        basis = [np.array([math.cos(t), math.sin(t), 1.0]) for t in (theta_k, theta_1, theta_2)]
-        P = el.P[0] * basis[0][0] + el.P[1] * basis[0][1] + el.P[2]
-        y = np.linalg.lstsq(Q, P @ np.kron(basis[1], basis[2]) - r, rcond=None)[0]
-        theta = np.zeros(6)
-        theta[k], theta[k + 1], theta[k + 2] = theta_k, theta_1, theta_2
-        a, b = el.right_joints
-        theta[a] = math.atan2(y[5], y[2])
-        theta[b] = math.atan2(y[7], y[6])
-        g = el.dropped
-        before = np.eye(4)
-        for j in range(g):
-            before = before @ dh_row(theta[j], *el.rows[j])
-        after = np.eye(4)
-        for j in range(g + 1, 6):
-            after = after @ dh_row(theta[j], *el.rows[j])
-        A_g = _inverse(before) @ H @ _inverse(after)
-        theta[g] = math.atan2(A_g[1, 0], A_g[0, 0])
-        return theta
+        DH frame 6 of the exact chain), before refinement: numpy's reference of the compiled
+        candidates (:func:`dhkin.ik.general6r_arrangement.candidates`)."""
+        return candidates(self, T_dh, arrangement, elimination)
 
     # -- solutions ------------------------------------------------------------------------
 
@@ -455,7 +355,7 @@ class General6RSolver:
         roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, seed, verify,
                                                         lever)
         if np.any(singular):
-            self._seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
+            seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
         if roots.shape[0] == 0:
             reason = ("no real solution: the elimination found no root that verifies on the "
                       f"exact chain at tolerance {tolerance:g}")
@@ -467,14 +367,16 @@ class General6RSolver:
         reference = seed
         slack = tolerance / lever
         if copies:
-            blocks = [(np.array(self._copies(q, reference, True, slack)).reshape(-1, 6),
-                       error, flag)
+            lower, upper = self.table.lower, self.table.upper
+            blocks = [(np.array(copies_within(lower, upper, q, reference, True, slack)
+                                ).reshape(-1, 6), error, flag)
                       for q, error, flag in zip(roots, errors, flags, strict=True)]
             q_out = np.concatenate([b for b, _, _ in blocks])
             residuals = np.concatenate([np.tile(e, (b.shape[0], 1)) for b, e, _ in blocks])
             out_flags = [f for b, _, f in blocks for _ in range(b.shape[0])]
-            q_out, residuals, out_flags = self._onto_limits(q_out, residuals, out_flags, chain,
-                                                            tip_target, tolerance, lever)
+            q_out, residuals, out_flags = onto_limits(
+                lower, upper, q_out, residuals, out_flags, chain, tip_target,
+                self.verification_tolerance(tolerance, lever))
         else:
             from dhkin.ik.compiled.general6r import nearest_copies
 
@@ -497,60 +399,6 @@ class General6RSolver:
         return IKSolutions(q=q_out, configurations=configurations, flags=tuple(out_flags),
                            residuals=residuals, family=self.family, dropped=failed,
                            projection=projection)
-
-    def _seed_members(self, roots: NDArray[np.float64], errors: NDArray[np.float64],
-                      singular: NDArray[np.bool_], seed: NDArray[np.float64],
-                      chain: NDArray[np.float64], tip_target: NDArray[np.float64],
-                      tolerance: float, lever: float) -> None:
-        """The seed's choice where a joint is free, in place: each singular root moves along
-        the solutions towards the seed, as the families' seeded candidate does (the member of
-        the solution family nearest the seed, docs/ik_core.md): steps along the Jacobian's
-        weak directions (singular values within :func:`singular_band`) by the seed's offset
-        projected onto them, at most MAX_JOINT_STEP per joint, each refined by Newton on the
-        exact chain and kept while it verifies, comes nearer the seed and stays on the same
-        root (the midpoint of the step verifies too: the rule by which candidates are merged)
-        (at most :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of
-        solutions) Newton returns to the root, or lands on another root (near a fold: the
-        midpoint does not verify), and nothing moves."""
-        from dhkin.ik.compiled.chain import MAX_JOINT_STEP, _jacobian, check, fk_frames, refine
-
-        target = np.ascontiguousarray(tip_target[:3])
-        band = singular_band(tolerance)
-        fixed = np.zeros(6, np.bool_)
-        state = np.empty(12)
-        frames = np.empty((7, 12))
-        J = np.empty((6, 6))
-        for index in np.flatnonzero(singular):
-            q = roots[index].copy()
-            distance = float(np.sum(_wrap(q - seed) ** 2))
-            for _ in range(SEED_STEPS):
-                fk_frames(chain, q, frames)
-                _jacobian(chain, frames, J)
-                J[:3] /= lever
-                _, sigma, Vt = np.linalg.svd(J)
-                weak = Vt[sigma <= band]
-                step = weak.T @ (weak @ _wrap(seed - q))
-                longest = float(np.max(np.abs(step)))
-                if longest <= 0.0:
-                    break
-                if longest > MAX_JOINT_STEP:
-                    step *= MAX_JOINT_STEP / longest
-                trial = np.ascontiguousarray(q + step)
-                refine(chain, target, trial, fixed, tolerance)
-                position, rotation = check(chain, trial, target, state)
-                trial_distance = float(np.sum(_wrap(trial - seed) ** 2))
-                if not (position <= tolerance and rotation <= tolerance
-                        and trial_distance < distance):
-                    break
-                # the step stays on this root (their midpoint verifies too, the merging rule):
-                # near a fold Newton can land on a distinct root nearer the seed instead
-                middle = np.ascontiguousarray(q + 0.5 * _wrap(trial - q))
-                between = check(chain, middle, target, state)
-                if not (between[0] <= tolerance and between[1] <= tolerance):
-                    break
-                q, distance = _wrap(trial), trial_distance
-                errors[index] = position, rotation
-            roots[index] = q
 
     def solve_batch(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                     tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
@@ -617,130 +465,7 @@ class General6RSolver:
             self._configurations[turns] = found
         return found
 
-    def _nearest_copies(self, roots: NDArray[np.float64], reference: NDArray[np.float64],
-                        slack: float) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-        """Per root, per joint the 2pi copy nearest ``reference`` within the limits widened by
-        ``slack``, and whether every joint has one."""
-        lower, upper = self.table.lower - slack, self.table.upper + slack
-        q = roots + TWO_PI * np.rint((reference - roots) / TWO_PI)
-        q = np.where(q < lower, q + TWO_PI * np.ceil((lower - q) / TWO_PI), q)
-        q = np.where(q > upper, q - TWO_PI * np.ceil((q - upper) / TWO_PI), q)
-        inside: NDArray[np.bool_] = np.all((q >= lower) & (q <= upper), axis=1)
-        return q, inside
-
-    def _copies(self, q: NDArray[np.float64], reference: NDArray[np.float64],
-                every: bool, slack: float) -> list[NDArray[np.float64]]:
-        """The 2pi copies of q within the limits widened by ``slack``: the one nearest
-        ``reference`` (per joint), or all."""
-        lower, upper = self.table.lower - slack, self.table.upper + slack
-        options = []
-        for j in range(6):
-            first = math.ceil((lower[j] - q[j]) / TWO_PI)
-            last = math.floor((upper[j] - q[j]) / TWO_PI)
-            values = [q[j] + TWO_PI * n for n in range(first, last + 1)]
-            if not values:
-                return []
-            if not every:
-                values = [values[int(np.argmin(np.abs(np.array(values) - reference[j])))]]
-            options.append(values)
-        grid = np.array(np.meshgrid(*options, indexing="ij")).reshape(6, -1).T
-        return list(grid)
-
-    def _onto_limits(self, q: NDArray[np.float64], residuals: NDArray[np.float64],
-                     flags: list[frozenset[str]], chain: NDArray[np.float64],
-                     tip_target: NDArray[np.float64], tolerance: float, lever: float
-                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], list[frozenset[str]]]:
-        """As in the families (docs/ik_core.md, "limits"): a value within tolerance / lever
-        outside a joint limit counts as on it: it is set onto the limit and verified again
-        (dropped if it no longer verifies)."""
-        clipped = np.clip(q, self.table.lower, self.table.upper)
-        moved = np.flatnonzero(np.any(clipped != q, axis=1))
-        if moved.size == 0:
-            return q, residuals, flags
-        from dhkin.ik.compiled.chain import check
-
-        verify = self.verification_tolerance(tolerance, lever)
-        target = np.ascontiguousarray(tip_target[:3])
-        state = np.empty(12)
-        keep = np.ones(q.shape[0], np.bool_)
-        residuals = residuals.copy()
-        for row in moved:
-            position, rotation = check(chain, np.ascontiguousarray(clipped[row]), target, state)
-            keep[row] = position <= verify and rotation <= verify
-            residuals[row] = position, rotation
-        return (clipped[keep], residuals[keep],
-                [f for f, k in zip(flags, keep, strict=True) if k])
-
-
 _REGULAR: frozenset[str] = frozenset()
 _SINGULAR: frozenset[str] = frozenset({"singular"})
 
 
-def _frames_at_zero(pre: NDArray[np.float64]) -> NDArray[np.float64]:
-    out = np.empty((7, 4, 4))
-    current = np.eye(4)
-    for j in range(7):
-        current = current @ pre[j]
-        out[j] = current
-    return out
-
-
-def _wrap(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Angles wrapped to (-pi, pi]."""
-    return np.asarray(-((-q + math.pi) % TWO_PI - math.pi))
-
-
-def _ratio_angle(m: NDArray[np.float64], axis: int) -> float:
-    """The angle whose half-angle tangent is the ratio of consecutive monomials along ``axis``
-    of m (4, 3) ~ x4^i x5^j: 2 atan2(next, this) on the pair of largest size."""
-    pairs = (m[:-1, :], m[1:, :]) if axis == 0 else (m[:, :-1], m[:, 1:])
-    size = pairs[0] ** 2 + pairs[1] ** 2
-    index = np.unravel_index(int(np.argmax(size)), size.shape)
-    return 2.0 * math.atan2(float(pairs[1][index]), float(pairs[0][index]))
-
-
-def choose_arrangement(solver: General6RSolver, poses: int = 12) -> Arrangement:
-    """The arrangement whose matrix polynomial is regular and which recovers the most sample
-    solutions (joint vectors drawn with a fixed seed; FK gives their poses) on the exact chain,
-    ties broken by the polynomial's conditioning."""
-    rng = np.random.default_rng(16)
-    samples = rng.uniform(-math.pi, math.pi, size=(poses, 6))
-    targets = [_inverse(solver.table.base) @ solver.table.fk(q) @ _inverse(solver.table.tool)
-               for q in samples]
-    best: tuple[float, float] | None = None
-    choice: Arrangement | None = None
-    for reversed_ in (False, True):
-        for k in (1, 2, 0):
-            arrangement = Arrangement(reversed_, k)
-            _, el = solver._eliminator(arrangement)
-            regular = _regularity(solver, el, targets[0], arrangement)
-            if regular < SINGULAR_PENCIL:
-                continue
-            recovered = 0
-            for q, T_dh in zip(samples, targets, strict=True):
-                cands = solver.candidates(T_dh, arrangement, el)
-                if cands.shape[0] and np.min(np.max(np.abs(_wrap(cands - q)), axis=1)) < 1e-6:
-                    recovered += 1
-            score = (recovered, regular)
-            if best is None or score > best:
-                best, choice = score, arrangement
-    if choice is None:
-        raise FamilyError(f"{solver.table.name}: every elimination's matrix polynomial is "
-                          "singular")
-    return choice
-
-
-def _regularity(solver: General6RSolver, el: Elimination, T_dh: NDArray[np.float64],
-                arrangement: Arrangement) -> float:
-    """Smallest singular value of M(x3) over its norm at two generic x3."""
-    model = el.model
-    target = _inverse(T_dh) if arrangement.reversed else T_dh
-    H = _inverse(model.D0) @ target @ _inverse(model.E)
-    H[:3, 3] /= model.scale
-    A, B, C, _, _ = el.pencil(H)
-    values = []
-    for x in (0.7, -1.3):
-        M = A * x * x + B * x + C
-        s = np.linalg.svd(M, compute_uv=False)
-        values.append(s[-1] / s[0])
-    return float(min(values))

@@ -18,14 +18,7 @@ from numba import types
 from numba.np.linalg import _LAPACK, ensure_lapack
 from numpy.typing import NDArray
 
-from dhkin.ik.compiled.chain import (
-    MAX_JOINT_STEP,
-    SEED_DAMPING,
-    _jacobian,
-    check,
-    fk_frames,
-    refine,
-)
+from dhkin.ik.compiled.general6r_roots import nearest_copies, settle
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.pose import project, status
 
@@ -43,20 +36,6 @@ SHIFT, K, REVERSED, SCALE, BAND = 0, 1, 2, 3, 4
 #: The leading matrix is accepted when its reciprocal condition (1-norm) is at least this: the
 #: eigenvalues then lose at most ~1e-8 relative to rounding, well within Newton's basin.
 LEAD_CONDITION = 1e-8
-
-
-#: Refinement budget (chain evaluations) per candidate, and the growth Newton may take.
-BUDGET = 120
-GROWTH = 1e6
-
-
-#: Refinement budget of a candidate from a near-real complex pair of eigenvalues: a real root
-#: of the chain that the model's rounding or its fold made complex lies within the imaginary
-#: band (0.1 rad) of the start and converges in a few Newton steps (at a double root linearly,
-#: halving per step: from 1e-8 to 1e-12 within ~15); a truly complex one never converges, and
-#: the full budget spent on it was most of the refinement's time (0.8 such per pose on the
-#: CRX-10iA and xArm6).
-PAIR_BUDGET = 40
 
 
 @jit
@@ -92,11 +71,6 @@ def _quantities(R: NDArray[np.float64], out: NDArray[np.float64]) -> None:
     out[11] = pp * l0 - 2.0 * pl * p0
     out[12] = pp * l1 - 2.0 * pl * p1
     out[13] = pp * l2 - 2.0 * pl * p2
-
-
-@jit
-def _wrap(x: float) -> float:
-    return -((-x + math.pi) % (2.0 * math.pi) - math.pi)
 
 
 @jit
@@ -365,157 +339,6 @@ def _ratio_angle(m: NDArray[np.float64], axis: int) -> float:
                 if size > best:
                     best, a, b = size, m[i, j], m[i, j + 1]
     return 2.0 * math.atan2(b, a)
-
-
-@jit
-def smallest_singular(chain: NDArray[np.float64], q: NDArray[np.float64], lever: float,
-                      band: float) -> float:
-    """The smallest singular value of the exact chain's Jacobian at q, its linear rows divided
-    by ``lever`` (m per rad of a point of the arm; rad and m/lever then weigh alike), where it
-    is at most ``band``; above it a lower bound may come back instead: |det J| / |J|_F^5 <=
-    sigma_min (the other five singular values are at most |J|_F), and the SVD (~20 times the
-    cost) runs only where that bound is at most ``band``."""
-    frames = np.empty((7, 12))
-    fk_frames(chain, q, frames)
-    J = np.empty((6, 6))
-    _jacobian(chain, frames, J)
-    size = 0.0
-    for r in range(6):
-        for c in range(6):
-            if r < 3:
-                J[r, c] /= lever
-            size += J[r, c] * J[r, c]
-    bound = abs(np.linalg.det(J)) / size ** 2.5 if size > 0.0 else 0.0
-    if bound > band:
-        return bound
-    return float(np.linalg.svd(J)[1][5])
-
-
-@jit
-def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArray[np.float64],
-           n_starts: int, seeded: int, tolerance: float, lever: float, band: float,
-           ill_conditioned: bool, paired: int, roots: NDArray[np.float64],
-           errors: NDArray[np.float64], sigmas: NDArray[np.float64]) -> tuple[int, int]:
-    """Refine every start on the exact chain, keep those that verify, merge those that are
-    one root (close, and their midpoint verifies). The start at index ``seeded`` (the seed)
-    is used on a singular pose (no candidate verified, a root is singular, sigma <= ``band``,
-    or the eigenproblem is ``ill_conditioned``) and, as on the families' refined tables
-    (docs/ik_core.md), where the seed is within one maximal Newton step of the pose (rotation
-    error at most MAX_JOINT_STEP, position error at most MAX_JOINT_STEP x ``lever``); a seed
-    farther from a regular pose is not a start. A seed starts damped, and its root, when it
-    merges with a root found before, replaces it if nearer the seed (on a curve of solutions,
-    the seed's member). Starts from ``paired`` to ``seeded`` (near-real complex pairs of
-    eigenvalues) get PAIR_BUDGET. Returns (roots found, candidates that did not verify); sigmas:
-    :func:`smallest_singular` of each root (``lever``, ``band``)."""
-    target = np.ascontiguousarray(T_dh[:3])
-    fixed = np.zeros(6, np.bool_)
-    state = np.empty(12)
-    q = np.empty(6)
-    middle = np.empty(6)
-    found, failed = 0, 0
-    for index in range(n_starts):
-        if index == seeded and found > 0 and not ill_conditioned:
-            singular = False
-            for other in range(found):
-                singular = singular or sigmas[other] <= band
-            for j in range(6):
-                q[j] = starts[index, j]
-            position, rotation = check(chain, q, target, state)
-            near = rotation <= MAX_JOINT_STEP and position <= MAX_JOINT_STEP * lever
-            if not (singular or near):
-                break
-        for j in range(6):
-            q[j] = starts[index, j]
-        damping = SEED_DAMPING if index >= seeded else 0.0
-        budget = PAIR_BUDGET if paired <= index < seeded else BUDGET
-        refine(chain, target, q, fixed, tolerance, budget, GROWTH, damping)
-        position, rotation = check(chain, q, target, state)
-        if not (position <= tolerance and rotation <= tolerance):
-            if index < seeded:
-                failed += 1
-            continue
-        for j in range(6):
-            q[j] = _wrap(q[j])
-        duplicate = -1
-        for other in range(found):
-            largest = 0.0
-            for j in range(6):
-                middle[j] = _wrap(q[j] - roots[other, j])
-                largest = max(largest, abs(middle[j]))
-            if largest > MAX_JOINT_STEP:
-                continue
-            for j in range(6):
-                middle[j] = roots[other, j] + 0.5 * middle[j]
-            p2, r2 = check(chain, middle, target, state)
-            if p2 <= tolerance and r2 <= tolerance:
-                duplicate = other
-                break
-        slot = found
-        if duplicate >= 0:
-            if index < seeded:
-                continue
-            mine, theirs = 0.0, 0.0
-            for j in range(6):
-                mine += _wrap(q[j] - starts[index, j]) ** 2
-                theirs += _wrap(roots[duplicate, j] - starts[index, j]) ** 2
-            if mine >= theirs:
-                continue
-            slot = duplicate
-        for j in range(6):
-            roots[slot, j] = q[j]
-        errors[slot, 0], errors[slot, 1] = position, rotation
-        sigmas[slot] = smallest_singular(chain, q, lever, band)
-        if slot == found:
-            found += 1
-    return found, failed
-
-
-@jit
-def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
-                   roots: NDArray[np.float64], errors: NDArray[np.float64], found: int,
-                   reference: NDArray[np.float64], lower: NDArray[np.float64],
-                   upper: NDArray[np.float64], slack: float, tolerance: float,
-                   out_q: NDArray[np.float64], out_errors: NDArray[np.float64],
-                   kept: NDArray[np.int64]) -> int:
-    """Per root, per joint its 2pi copy nearest ``reference`` within the limits widened by
-    ``slack`` (a value that far outside a limit counts as on it: set onto it and verified
-    again on ``chain`` against T (3 or 4 rows) at ``tolerance``, as in the families); roots
-    without such a copy, or that no longer verify, are left out. Writes the kept rows in
-    order into out_q, out_errors and their root indices into kept; returns their number."""
-    two_pi = 2.0 * math.pi
-    target = np.ascontiguousarray(T[:3])
-    state = np.empty(12)
-    q = np.empty(6)
-    count = 0
-    for k in range(found):
-        inside, moved = True, False
-        for j in range(6):
-            value = roots[k, j] + two_pi * np.rint((reference[j] - roots[k, j]) / two_pi)
-            if value < lower[j] - slack:
-                value += two_pi * math.ceil((lower[j] - slack - value) / two_pi)
-            if value > upper[j] + slack:
-                value -= two_pi * math.ceil((value - upper[j] - slack) / two_pi)
-            if value < lower[j] - slack or value > upper[j] + slack:
-                inside = False
-                break
-            if value < lower[j]:
-                value, moved = lower[j], True
-            elif value > upper[j]:
-                value, moved = upper[j], True
-            q[j] = value
-        if not inside:
-            continue
-        position, rotation = errors[k, 0], errors[k, 1]
-        if moved:
-            position, rotation = check(chain, q, target, state)
-            if not (position <= tolerance and rotation <= tolerance):
-                continue
-        for j in range(6):
-            out_q[count, j] = q[j]
-        out_errors[count, 0], out_errors[count, 1] = position, rotation
-        kept[count] = k
-        count += 1
-    return count
 
 
 #: Layout of :func:`solve_pose`'s ``info``: the pose's projection, candidates that did not

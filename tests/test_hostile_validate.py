@@ -24,7 +24,6 @@ import pytest
 import yaml
 
 import dhkin
-from dhkin.cli import main
 from dhkin.errors import InputError, UnreachableError
 from dhkin.validation import (
     MAX_SOLUTIONS_PER_CALL,
@@ -37,6 +36,7 @@ from dhkin.validation import (
     write_failures,
 )
 from dhkin.validation.calls import KEPT_OF_A_BAD_ANSWER
+from tests.test_cli import run
 
 from . import broken
 from .conftest import REPO
@@ -47,15 +47,6 @@ N = 5  # uniform samples per run (plus one special-angle and one near-singular s
 @pytest.fixture(scope="module")
 def ur5() -> dhkin.Robot:
     return dhkin.load("ur5")
-
-
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    try:
-        code = main(list(argv))
-    except SystemExit as exit_:  # argparse's usage errors (one line, exit 2)
-        code = int(exit_.code or 0)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def assert_one_line_error(code: int, err: str, *named: str) -> None:

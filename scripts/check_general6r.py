@@ -94,7 +94,7 @@ def main() -> None:
             solver = General6RSolver(table)
             Q = rng.uniform(-math.pi, math.pi, size=(args.table_poses, 6))
             for q in Q:
-                roots, _, _ = solver.roots(solver.target_dh(table.fk(q)), None, 1e-9)
+                roots, _, _ = solver.roots(solver.target_dh(table.fk(q)), 1e-9)
                 if roots.shape[0] % 2:
                     print(f"odd count: table {index}, q = {q.tolist()}: {roots.shape[0]} roots",
                           flush=True)

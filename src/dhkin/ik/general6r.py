@@ -23,6 +23,7 @@ TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
 from __future__ import annotations
 
 import functools
+import math
 import threading
 from collections.abc import Callable
 from types import MappingProxyType
@@ -42,7 +43,6 @@ from dhkin.ik.general6r_answer import (
 from dhkin.ik.general6r_arrangement import (
     IMAGINARY_BAND,
     Arrangement,
-    candidates,
     choose_arrangement,
     frames_at_zero,
 )
@@ -85,11 +85,16 @@ class General6RSolver:
         self.tip_chain = self.chain.copy()
         self.tip_chain[6, :12] = (pre[6] @ table.tool)[:3].ravel()
         self.tip_lever = self.lever + float(np.linalg.norm(table.tool[:3, 3]))
+        #: The sum of the chain's link lengths (m): DH frame 6 never lies farther than this
+        #: from DH frame 0 (a farther pose is out of reach before any elimination).
+        self.links = float(sum(np.linalg.norm(self.chain[j, [3, 7, 11]]) for j in range(7)))
         if arrangement is None:
             arrangement = choose_arrangement(self)
         self.arrangement = arrangement
         self.model, self.elimination = self._eliminator(arrangement)
         self._data = self.kernel_data()
+        #: The moved poses of an ill-conditioned pose (:func:`perturbations`).
+        self.perturbations = perturbations(self.model.scale)
         self._configurations: dict[tuple[int, ...], Configuration] = {}
         self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
         self._zero_seed = np.zeros(6)
@@ -117,11 +122,14 @@ class General6RSolver:
     def compiled_candidates(self, T_dh: NDArray[np.float64],
                             data: tuple[NDArray[np.float64], ...] | None = None
                             ) -> NDArray[np.float64]:
-        """:meth:`candidates`, compiled (the same values)."""
-        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
+        """The starts of one elimination (:func:`dhkin.ik.compiled.general6r.candidates`) of
+        the target T_dh (DH frame 0 -> DH frame 6 of the exact chain), before refinement:
+        joint values (m, 6)."""
+        from dhkin.ik.compiled.general6r import MAX_PER_POSE, candidates
 
-        out = np.empty((MAX_CANDIDATES, 6))
-        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out, np.empty(2))
+        out = np.empty((MAX_PER_POSE, 6))
+        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out,
+                           np.empty(MAX_PER_POSE, np.bool_), np.empty(2))
         return out[:count]
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
@@ -130,15 +138,6 @@ class General6RSolver:
             pre = np.stack([_inverse(pre[6 - i]) for i in range(7)])
         model = refit(pre)
         return model, Elimination(model, arrangement.k, SHIFT)
-
-    # -- candidates -----------------------------------------------------------------------
-
-    def candidates(self, T_dh: NDArray[np.float64], arrangement: Arrangement | None = None,
-                   elimination: Elimination | None = None) -> NDArray[np.float64]:
-        """Joint values (m, 6) of every near-real eigenvalue for the target T_dh (DH frame 0 ->
-        DH frame 6 of the exact chain), before refinement: numpy's reference of the compiled
-        candidates (:func:`dhkin.ik.general6r_arrangement.candidates`)."""
-        return candidates(self, T_dh, arrangement, elimination)
 
     # -- solutions ------------------------------------------------------------------------
 
@@ -211,54 +210,44 @@ class General6RSolver:
 
         return max(tolerance - FK_ROUNDING * lever, 0.5 * tolerance)
 
-    def roots(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
-              tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+    def roots(self, T_dh: NDArray[np.float64], tolerance: float
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
         """The verified, distinct solutions (k, 6) wrapped to (-pi, pi] for the target T_dh (DH
         frame 0 -> DH frame 6), their residuals there (k, 2), and how many candidates did not
-        verify."""
-        return self._roots(T_dh, T_dh, self.chain, q_seed, tolerance)
-
-    def _roots(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
-               chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
-               tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
-        """:meth:`roots`, refined and verified on ``chain`` against ``tip_target`` (DH frame
-        0 -> the chain's last frame)."""
-        roots, errors, failed, _ = self._settled(T_dh, tip_target, chain, q_seed, tolerance,
-                                                 self.lever)
+        verify. No seed: the roots do not depend on one."""
+        roots, errors, failed, _ = self._settled(T_dh, T_dh, self.chain, tolerance, self.lever)
         return roots, errors, failed
 
     def _settled(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
-                 chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
-                 tolerance: float, lever: float
+                 chain: NDArray[np.float64], tolerance: float, lever: float
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, NDArray[np.bool_]]:
-        """:meth:`_roots` and whether each root is singular (:func:`singular_band`, or the
-        pose's eigenproblem ill-conditioned: no leading matrix reached LEAD_CONDITION)."""
-        from dhkin.ik.compiled.general6r import (
-            LEAD_CONDITION,
-            MAX_CANDIDATES,
-            candidates,
-            settle,
-        )
+        """The roots of T_dh refined and verified on ``chain`` against ``tip_target`` (DH frame
+        0 -> the chain's last frame), their residuals, the candidates that did not verify, and
+        whether each root is singular (:func:`singular_band`)."""
+        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, all_candidates, settle
 
         starts = np.empty((MAX_CANDIDATES, 6))
+        paired = np.empty(MAX_CANDIDATES, np.bool_)
         info = np.empty(2)
-        count = candidates(*self._data, np.ascontiguousarray(T_dh), starts, info)
-        seeded = count
-        if q_seed is not None:
-            starts[count] = q_seed
-            count += 1
-        roots = np.empty((MAX_CANDIDATES, 6))
-        errors = np.empty((MAX_CANDIDATES, 2))
-        sigmas = np.empty(MAX_CANDIDATES)
+        count = all_candidates(*self._data, self.perturbations, np.ascontiguousarray(T_dh),
+                               starts, paired, info)
+        roots = np.empty((count, 6))
+        errors = np.empty((count, 2))
+        sigmas = np.empty(count)
         band = singular_band(tolerance)
-        ill_conditioned = not info[0] >= LEAD_CONDITION
-        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, count, seeded,
-                               tolerance, lever, band, ill_conditioned, int(info[1]), roots,
-                               errors, sigmas)
-        singular = sigmas[:found] <= band
-        if ill_conditioned:
-            singular[:] = True
-        return roots[:found], errors[:found], failed, singular
+        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, paired, count,
+                               tolerance, lever, band, roots, errors, sigmas)
+        return roots[:found], errors[:found], failed, sigmas[:found] <= band
+
+    def reach(self, tolerance: float, tool: NDArray[np.float64]) -> float:
+        """How far DH frame 6 may lie from DH frame 0 (m) for a pose of the point verified
+        (``tool``: DH frame 6 -> that point) within ``tolerance``: the chain's links, widened
+        by the tolerance at the point and its rotation over the tool's length, and FK
+        rounding."""
+        from dhkin.ik.compiled.plan import FK_ROUNDING
+
+        return (self.links + tolerance * (1.0 + float(np.linalg.norm(tool[:3, 3])))
+                + FK_ROUNDING * self.tip_lever)
 
     def solve_one(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                   tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
@@ -294,20 +283,22 @@ class General6RSolver:
         constants = self._fast_constants.get(tolerance)
         if constants is None:
             verify = self.verification_tolerance(tolerance, self.tip_lever)
-            constants = (verify, self.tip_lever, singular_band(verify), self.table.lower,
-                         self.table.upper, tolerance / self.tip_lever)
+            constants = (self.reach(tolerance, self.table.tool), verify, self.tip_lever,
+                         singular_band(verify), self.table.lower, self.table.upper,
+                         tolerance / self.tip_lever)
             self._fast_constants[tolerance] = constants
         try:
             buffers = self._buffers.arrays
         except AttributeError:
             buffers = self._fast_buffers()
-        count = self._fast_kernel(*self._data, self._base_inverse, self._tool_inverse,
-                                  self.tip_chain, target, seed, *constants, *buffers)
+        count = self._fast_kernel(*self._data, self.perturbations, self._base_inverse,
+                                  self._tool_inverse, self.tip_chain, target, seed, *constants,
+                                  *buffers)
         if count < 0:
             return None
         from dhkin.ik.compiled.general6r import FAILED, PROJECTION
 
-        out_q, out_errors, info = buffers[4], buffers[5], buffers[7]
+        out_q, out_errors, info = buffers[5], buffers[6], buffers[8]
         q = out_q[:count].copy()
         turns = np.rint(q * (1.0 / TWO_PI)).astype(np.int64).tolist()
         return IKSolutions(q=q, configurations=tuple(map(self._configuration,
@@ -318,12 +309,13 @@ class General6RSolver:
 
     def _fast_buffers(self) -> tuple[NDArray[Any], ...]:
         """Per-thread work arrays of :func:`dhkin.ik.compiled.general6r.solve_pose`: starts,
-        roots, errors, sigmas, out_q, out_errors, kept, info."""
+        paired, roots, errors, sigmas, out_q, out_errors, kept, info."""
         from dhkin.ik.compiled.general6r import MAX_CANDIDATES
 
         n = MAX_CANDIDATES
-        arrays = (np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 2)), np.empty(n),
-                  np.empty((n, 6)), np.empty((n, 2)), np.empty(n, np.int64), np.empty(2))
+        arrays = (np.empty((n, 6)), np.empty(n, np.bool_), np.empty((n, 6)), np.empty((n, 2)),
+                  np.empty(n), np.empty((n, 6)), np.empty((n, 2)), np.empty(n, np.int64),
+                  np.empty(2))
         self._buffers.arrays = arrays
         return arrays
 
@@ -335,9 +327,9 @@ class General6RSolver:
         from dhkin.ik.compiled.general6r import solve_pose
         from dhkin.ik.solver import _compiled
 
-        args = (*self._data, self._base_inverse, self._tool_inverse, self.tip_chain,
-                np.eye(4), self._zero_seed, DEFAULT_TOLERANCE, 1.0, 1.0, self.table.lower,
-                self.table.upper, 1.0, *self._fast_buffers())
+        args = (*self._data, self.perturbations, self._base_inverse, self._tool_inverse,
+                self.tip_chain, np.eye(4), self._zero_seed, 1.0, DEFAULT_TOLERANCE, 1.0, 1.0,
+                self.table.lower, self.table.upper, 1.0, *self._fast_buffers())
         kernel: Callable[..., int] = _compiled(solve_pose, args, None)
         return kernel
 
@@ -345,15 +337,26 @@ class General6RSolver:
                seed: NDArray[np.float64] | None, tolerance: float,
                tip: tuple[NDArray[np.float64], NDArray[np.float64], float],
                copies: bool) -> IKSolutions:
-        """:meth:`solve_one` of a checked, projected pose."""
+        """:meth:`solve_one` of a checked, projected pose. The roots do not depend on the seed:
+        it only chooses each root's 2pi copy and, on a curve of solutions (a singular root),
+        the member nearest it."""
+        from dhkin.ik.compiled.general6r import within_reach
+
         chain, tool_inverse, lever = tip
         tip_target = self._base_inverse @ target
         T_dh = tip_target @ tool_inverse
+        reach = self.reach(tolerance, _inverse(tool_inverse))
+        if not within_reach(T_dh, reach):
+            largest = float(np.abs(T_dh[:3, 3]).max())
+            distance = largest * float(np.linalg.norm(T_dh[:3, 3] / largest))
+            return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
+                               reason=f"out of reach: DH frame 6 lies {distance:.6g} m from "
+                                      f"DH frame 0, farther than the chain's links reach "
+                                      f"({self.links:.6g} m)")
         verify = self.verification_tolerance(tolerance, lever)
         if seed is None:  # as in the families: without a seed, free joints are chosen near 0
             seed = np.zeros(6)
-        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, seed, verify,
-                                                        lever)
+        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, verify, lever)
         if np.any(singular):
             seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
         if roots.shape[0] == 0:
@@ -464,6 +467,40 @@ class General6RSolver:
             found = Configuration(labels=self.branch_labels[0], turns=turns)
             self._configurations[turns] = found
         return found
+
+#: Size of the moved poses of an ill-conditioned pose (:func:`perturbations`; rad, and units
+#: of the model's length scale). Where M(x) is singular for every x at a pose (special poses
+#: of the tilted UR5 in every arrangement, of the CRX-10iA in its own), a pose moved by e has
+#: a regular, but e-close to singular, matrix polynomial: its eigenvalues keep the regular
+#: part's (the roots), the null vectors lose eps / e of accuracy, and each regular root of
+#: sigma moves by ~e / sigma (near a fold, a double root splits or turns into a complex pair
+#: ~sqrt(e) off the real axis, within the imaginary band): all Newton starts. Measured on
+#: the ill-conditioned special-angle poses of the CRX-10iA and the tilted UR5 (182 of 800),
+#: every root was found for e from 1e-6 to 1e-3 (a root lost at 1e-7 and at 1e-2); 1e-4 lies
+#: in the middle of that range.
+PERTURBATION = 1e-4
+
+
+#: The direction of the moved poses: a fixed twist (rotation, translation) with no special
+#: component.
+PERTURBATION_TWIST = np.array([0.3, -0.5, 0.7, 0.2, 0.4, -0.1]) / math.sqrt(1.04)
+
+
+def perturbations(scale: float) -> NDArray[np.float64]:
+    """The two rigid motions (2, 4, 4) exp(+-PERTURBATION twist) of DH frame 0 by which an
+    ill-conditioned pose is moved (:func:`dhkin.ik.compiled.general6r.all_candidates`),
+    translations in units of ``scale`` metres."""
+    out = np.tile(np.eye(4), (2, 1, 1))
+    for index, sign in enumerate((1.0, -1.0)):
+        rotation = sign * PERTURBATION * PERTURBATION_TWIST[:3]
+        angle = float(np.linalg.norm(rotation))
+        axis = rotation / angle
+        K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                      [-axis[1], axis[0], 0.0]])
+        out[index, :3, :3] = np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
+        out[index, :3, 3] = sign * PERTURBATION * scale * PERTURBATION_TWIST[3:]
+    return out
+
 
 _REGULAR: frozenset[str] = frozenset()
 _SINGULAR: frozenset[str] = frozenset({"singular"})

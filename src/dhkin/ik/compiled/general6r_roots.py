@@ -16,13 +16,14 @@ from numpy.typing import NDArray
 
 from dhkin.ik.compiled.chain import (
     MAX_JOINT_STEP,
-    SEED_DAMPING,
+    REFINE_FRACTION,
     _jacobian,
     check,
     fk_frames,
     refine,
 )
 from dhkin.ik.compiled.jit import jit
+from dhkin.ik.compiled.plan import FK_ROUNDING
 
 #: Refinement budget (chain evaluations) per candidate, and the growth Newton may take.
 BUDGET = 120
@@ -69,50 +70,35 @@ def smallest_singular(chain: NDArray[np.float64], q: NDArray[np.float64], lever:
 
 @jit
 def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArray[np.float64],
-           n_starts: int, seeded: int, tolerance: float, lever: float, band: float,
-           ill_conditioned: bool, paired: int, roots: NDArray[np.float64],
-           errors: NDArray[np.float64], sigmas: NDArray[np.float64]) -> tuple[int, int]:
-    """Refine every start on the exact chain, keep those that verify, merge those that are
-    one root (close, and their midpoint verifies). The start at index ``seeded`` (the seed)
-    is used on a singular pose (no candidate verified, a root is singular, sigma <= ``band``,
-    or the eigenproblem is ``ill_conditioned``) and, as on the families' refined tables
-    (docs/ik_core.md), where the seed is within one maximal Newton step of the pose (rotation
-    error at most MAX_JOINT_STEP, position error at most MAX_JOINT_STEP x ``lever``); a seed
-    farther from a regular pose is not a start. A seed starts damped, and its root, when it
-    merges with a root found before, replaces it if nearer the seed (on a curve of solutions,
-    the seed's member). Starts from ``paired`` to ``seeded`` (near-real complex pairs of
-    eigenvalues) get PAIR_BUDGET. Returns (roots found, candidates that did not verify); sigmas:
+           paired: NDArray[np.bool_], n_starts: int, tolerance: float, lever: float,
+           band: float, roots: NDArray[np.float64], errors: NDArray[np.float64],
+           sigmas: NDArray[np.float64]) -> tuple[int, int]:
+    """Refine every start on the exact chain, keep those that verify at ``tolerance``, merge
+    those that are one root (close, and their midpoint verifies). Only the elimination's
+    candidates are starts: the seed never is (it chooses among the roots, it does not find
+    them). Starts marked ``paired`` (near-real complex pairs of eigenvalues) get PAIR_BUDGET.
+    Newton runs until the residual is REFINE_FRACTION of the tolerance on the oracle's FK too
+    (:func:`refine_tolerance`). Returns (roots found, candidates that did not verify); sigmas:
     :func:`smallest_singular` of each root (``lever``, ``band``)."""
     target = np.ascontiguousarray(T_dh[:3])
     fixed = np.zeros(6, np.bool_)
     state = np.empty(12)
     q = np.empty(6)
     middle = np.empty(6)
+    goal = refine_tolerance(tolerance, lever)
     found, failed = 0, 0
     for index in range(n_starts):
-        if index == seeded and found > 0 and not ill_conditioned:
-            singular = False
-            for other in range(found):
-                singular = singular or sigmas[other] <= band
-            for j in range(6):
-                q[j] = starts[index, j]
-            position, rotation = check(chain, q, target, state)
-            near = rotation <= MAX_JOINT_STEP and position <= MAX_JOINT_STEP * lever
-            if not (singular or near):
-                break
         for j in range(6):
             q[j] = starts[index, j]
-        damping = SEED_DAMPING if index >= seeded else 0.0
-        budget = PAIR_BUDGET if paired <= index < seeded else BUDGET
-        refine(chain, target, q, fixed, tolerance, budget, GROWTH, damping)
+        budget = PAIR_BUDGET if paired[index] else BUDGET
+        refine(chain, target, q, fixed, goal, budget, GROWTH, 0.0)
         position, rotation = check(chain, q, target, state)
         if not (position <= tolerance and rotation <= tolerance):
-            if index < seeded:
-                failed += 1
+            failed += 1
             continue
         for j in range(6):
             q[j] = _wrap(q[j])
-        duplicate = -1
+        duplicate = False
         for other in range(found):
             largest = 0.0
             for j in range(6):
@@ -124,26 +110,24 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
                 middle[j] = roots[other, j] + 0.5 * middle[j]
             p2, r2 = check(chain, middle, target, state)
             if p2 <= tolerance and r2 <= tolerance:
-                duplicate = other
+                duplicate = True
                 break
-        slot = found
-        if duplicate >= 0:
-            if index < seeded:
-                continue
-            mine, theirs = 0.0, 0.0
-            for j in range(6):
-                mine += _wrap(q[j] - starts[index, j]) ** 2
-                theirs += _wrap(roots[duplicate, j] - starts[index, j]) ** 2
-            if mine >= theirs:
-                continue
-            slot = duplicate
+        if duplicate:
+            continue
         for j in range(6):
-            roots[slot, j] = q[j]
-        errors[slot, 0], errors[slot, 1] = position, rotation
-        sigmas[slot] = smallest_singular(chain, q, lever, band)
-        if slot == found:
-            found += 1
+            roots[found, j] = q[j]
+        errors[found, 0], errors[found, 1] = position, rotation
+        sigmas[found] = smallest_singular(chain, q, lever, band)
+        found += 1
     return found, failed
+
+
+@jit
+def refine_tolerance(tolerance: float, lever: float) -> float:
+    """The tolerance Newton is given (it stops at REFINE_FRACTION of it) so that a root's
+    residual is at most REFINE_FRACTION of ``tolerance`` on the oracle's FK as well: less the
+    FK rounding margin (FK_ROUNDING per metre of ``lever``) at that scale."""
+    return max(tolerance - FK_ROUNDING * lever / REFINE_FRACTION, 0.5 * tolerance)
 
 
 @jit

@@ -95,6 +95,9 @@ class General6RSolver:
         self._data = self.kernel_data()
         #: The moved poses of an ill-conditioned pose (:func:`perturbations`).
         self.perturbations = perturbations(self.model.scale)
+        from dhkin.ik.compiled.general6r_qz import DGGEV
+
+        self._dggev = DGGEV
         self._configurations: dict[tuple[int, ...], Configuration] = {}
         self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
         self._zero_seed = np.zeros(6)
@@ -126,9 +129,10 @@ class General6RSolver:
         the target T_dh (DH frame 0 -> DH frame 6 of the exact chain), before refinement:
         joint values (m, 6)."""
         from dhkin.ik.compiled.general6r import MAX_PER_POSE, candidates
+        from dhkin.ik.compiled.general6r_qz import DGGEV
 
         out = np.empty((MAX_PER_POSE, 6))
-        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out,
+        count = candidates(*(data or self._data), DGGEV, True, np.ascontiguousarray(T_dh), out,
                            np.empty(MAX_PER_POSE, np.bool_), np.empty(2))
         return out[:count]
 
@@ -225,12 +229,13 @@ class General6RSolver:
         0 -> the chain's last frame), their residuals, the candidates that did not verify, and
         whether each root is singular (:func:`singular_band`)."""
         from dhkin.ik.compiled.general6r import MAX_CANDIDATES, all_candidates, settle
+        from dhkin.ik.compiled.general6r_qz import DGGEV
 
         starts = np.empty((MAX_CANDIDATES, 6))
         paired = np.empty(MAX_CANDIDATES, np.bool_)
         info = np.empty(2)
-        count = all_candidates(*self._data, self.perturbations, np.ascontiguousarray(T_dh),
-                               starts, paired, info)
+        count = all_candidates(*self._data, self.perturbations, DGGEV,
+                               np.ascontiguousarray(T_dh), starts, paired, info)
         roots = np.empty((count, 6))
         errors = np.empty((count, 2))
         sigmas = np.empty(count)
@@ -291,7 +296,8 @@ class General6RSolver:
             buffers = self._buffers.arrays
         except AttributeError:
             buffers = self._fast_buffers()
-        count = self._fast_kernel(*self._data, self.perturbations, self._base_inverse,
+        count = self._fast_kernel(*self._data, self.perturbations, self._dggev,
+                                  self._base_inverse,
                                   self._tool_inverse, self.tip_chain, target, seed, *constants,
                                   *buffers)
         if count < 0:
@@ -325,9 +331,10 @@ class General6RSolver:
         solver's argument types (numba's per-call type resolution skipped, as in the
         families' :meth:`dhkin.ik.solver.ClosedFormSolver._entry_point`)."""
         from dhkin.ik.compiled.general6r import solve_pose
+        from dhkin.ik.compiled.general6r_qz import DGGEV
         from dhkin.ik.solver import _compiled
 
-        args = (*self._data, self.perturbations, self._base_inverse, self._tool_inverse,
+        args = (*self._data, self.perturbations, DGGEV, self._base_inverse, self._tool_inverse,
                 self.tip_chain, np.eye(4), self._zero_seed, 1.0, DEFAULT_TOLERANCE, 1.0, 1.0,
                 self.table.lower, self.table.upper, 1.0, *self._fast_buffers())
         kernel: Callable[..., int] = _compiled(solve_pose, args, None)
@@ -358,7 +365,8 @@ class General6RSolver:
             seed = np.zeros(6)
         roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, verify, lever)
         if np.any(singular):
-            seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
+            keep = seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
+            roots, errors, singular = roots[keep], errors[keep], singular[keep]
         if roots.shape[0] == 0:
             reason = ("no real solution: the elimination found no root that verifies on the "
                       f"exact chain at tolerance {tolerance:g}")
@@ -379,7 +387,7 @@ class General6RSolver:
             out_flags = [f for b, _, f in blocks for _ in range(b.shape[0])]
             q_out, residuals, out_flags = onto_limits(
                 lower, upper, q_out, residuals, out_flags, chain, tip_target,
-                self.verification_tolerance(tolerance, lever))
+                self.verification_tolerance(tolerance, lever), lever)
         else:
             from dhkin.ik.compiled.general6r import nearest_copies
 
@@ -388,7 +396,7 @@ class General6RSolver:
             kept = np.empty(found, np.int64)
             count = nearest_copies(chain, tip_target, roots, errors, found, reference,
                                    self.table.lower, self.table.upper, slack,
-                                   self.verification_tolerance(tolerance, lever), q_out,
+                                   self.verification_tolerance(tolerance, lever), lever, q_out,
                                    residuals, kept)
             q_out, residuals = q_out[:count], residuals[:count]
             out_flags = [flags[k] for k in kept[:count].tolist()]

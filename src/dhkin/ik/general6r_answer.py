@@ -15,11 +15,6 @@ from numpy.typing import NDArray
 from dhkin.ik.general6r_arrangement import wrap
 from dhkin.ik.inputs import TWO_PI
 
-#: The seed's member of a curve of solutions (a joint free at a singular pose) is followed by
-#: at most this many steps along the Jacobian's weak directions towards the seed, each refined
-#: back onto the solutions by Newton and kept only when it verifies and is nearer the seed.
-SEED_STEPS = 12
-
 
 def singular_band(tolerance: float) -> float:
     """A root is flagged "singular" when the smallest singular value sigma of its Jacobian
@@ -33,58 +28,40 @@ def singular_band(tolerance: float) -> float:
 
 
 def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
-             singular: NDArray[np.bool_], seed: NDArray[np.float64],
-             chain: NDArray[np.float64], tip_target: NDArray[np.float64],
-             tolerance: float, lever: float) -> None:
+                 singular: NDArray[np.bool_], seed: NDArray[np.float64],
+                 chain: NDArray[np.float64], tip_target: NDArray[np.float64],
+                 tolerance: float, lever: float) -> NDArray[np.bool_]:
     """The seed's choice where a joint is free, in place: each singular root moves along
-    the solutions towards the seed, as the families' seeded candidate does (the member of
-    the solution family nearest the seed, docs/ik_core.md): steps along the Jacobian's
-    weak directions (singular values within :func:`singular_band`) by the seed's offset
-    projected onto them, at most MAX_JOINT_STEP per joint, each refined by Newton on the
-    exact chain and kept while it verifies, comes nearer the seed and stays on the same
-    root (the midpoint of the step verifies too: the rule by which candidates are merged)
-    (at most :data:`SEED_STEPS`). Where the pose is only near-singular (no curve of
-    solutions) Newton returns to the root, or lands on another root (near a fold: the
-    midpoint does not verify), and nothing moves."""
-    from dhkin.ik.compiled.chain import MAX_JOINT_STEP, _jacobian, check, fk_frames, refine
+    the solutions towards the seed (:func:`dhkin.ik.compiled.general6r_roots.walk`), as
+    the families' seeded candidate does (the member of the solution family nearest the seed,
+    docs/ik_core.md). The seed is never a start: the roots stay those the elimination found.
+    Returns which roots to keep: a root that walked onto an earlier one (their midpoint
+    verifies, the merging rule) is one root with it."""
+    from dhkin.ik.compiled.chain import MAX_JOINT_STEP, check
+    from dhkin.ik.compiled.general6r_roots import walk
 
-    target = np.ascontiguousarray(tip_target[:3])
     band = singular_band(tolerance)
-    fixed = np.zeros(6, np.bool_)
-    state = np.empty(12)
-    frames = np.empty((7, 12))
-    J = np.empty((6, 6))
+    target = np.ascontiguousarray(tip_target[:3])
+    seed = np.ascontiguousarray(seed, dtype=np.float64)
     for index in np.flatnonzero(singular):
-        q = roots[index].copy()
-        distance = float(np.sum(wrap(q - seed) ** 2))
-        for _ in range(SEED_STEPS):
-            fk_frames(chain, q, frames)
-            _jacobian(chain, frames, J)
-            J[:3] /= lever
-            _, sigma, Vt = np.linalg.svd(J)
-            weak = Vt[sigma <= band]
-            step = weak.T @ (weak @ wrap(seed - q))
-            longest = float(np.max(np.abs(step)))
-            if longest <= 0.0:
-                break
-            if longest > MAX_JOINT_STEP:
-                step *= MAX_JOINT_STEP / longest
-            trial = np.ascontiguousarray(q + step)
-            refine(chain, target, trial, fixed, tolerance)
-            position, rotation = check(chain, trial, target, state)
-            trial_distance = float(np.sum(wrap(trial - seed) ** 2))
-            if not (position <= tolerance and rotation <= tolerance
-                    and trial_distance < distance):
-                break
-            # the step stays on this root (their midpoint verifies too, the merging rule):
-            # near a fold Newton can land on a distinct root nearer the seed instead
-            middle = np.ascontiguousarray(q + 0.5 * wrap(trial - q))
-            between = check(chain, middle, target, state)
-            if not (between[0] <= tolerance and between[1] <= tolerance):
-                break
-            q, distance = wrap(trial), trial_distance
-            errors[index] = position, rotation
+        q = np.ascontiguousarray(roots[index])
+        walk(chain, target, q, seed, tolerance, lever, band, errors[index])
         roots[index] = q
+    keep = np.ones(roots.shape[0], np.bool_)
+    state = np.empty(12)
+    for index in np.flatnonzero(singular):
+        for other in range(index):
+            if not keep[other]:
+                continue
+            step = wrap(roots[index] - roots[other])
+            if np.max(np.abs(step)) > MAX_JOINT_STEP:
+                continue
+            position, rotation = check(chain, np.ascontiguousarray(roots[other] + 0.5 * step),
+                                       target, state)
+            if position <= tolerance and rotation <= tolerance:
+                keep[index] = False
+                break
+    return keep
 
 
 def copies(lower: NDArray[np.float64], upper: NDArray[np.float64], q: NDArray[np.float64],
@@ -109,22 +86,28 @@ def copies(lower: NDArray[np.float64], upper: NDArray[np.float64], q: NDArray[np
 def onto_limits(lower: NDArray[np.float64], upper: NDArray[np.float64],
                 q: NDArray[np.float64], residuals: NDArray[np.float64],
                 flags: list[frozenset[str]], chain: NDArray[np.float64],
-                tip_target: NDArray[np.float64], verify: float
+                tip_target: NDArray[np.float64], verify: float, lever: float
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], list[frozenset[str]]]:
     """As in the families (docs/ik_core.md, "limits"): a value within tolerance / lever
-    outside a joint limit counts as on it: it is set onto the limit and verified again
-    (dropped if it no longer verifies)."""
+    outside a joint limit counts as on it: it is set onto the limit, the other joints are
+    refined with it held there (monotone Newton steps: a root on the limit up to rounding is
+    exact again), and the row is verified again (dropped if it no longer verifies)."""
     clipped = np.clip(q, lower, upper)
     moved = np.flatnonzero(np.any(clipped != q, axis=1))
     if moved.size == 0:
         return q, residuals, flags
-    from dhkin.ik.compiled.chain import check
+    from dhkin.ik.compiled.chain import check, refine
+    from dhkin.ik.compiled.general6r_roots import BUDGET, refine_tolerance
 
     target = np.ascontiguousarray(tip_target[:3])
     state = np.empty(12)
     keep = np.ones(q.shape[0], np.bool_)
     residuals = residuals.copy()
     for row in moved:
+        values = np.ascontiguousarray(clipped[row])
+        held = np.ascontiguousarray(clipped[row] != q[row])
+        refine(chain, target, values, held, refine_tolerance(verify, lever), BUDGET, 1.0, 0.0)
+        clipped[row] = np.clip(values, lower, upper)
         position, rotation = check(chain, np.ascontiguousarray(clipped[row]), target, state)
         keep[row] = position <= verify and rotation <= verify
         residuals[row] = position, rotation

@@ -86,12 +86,15 @@ def wrap(q: NDArray[np.float64]) -> NDArray[np.float64]:
 def choose_arrangement(solver: EliminatingSolver, poses: int = 12) -> Arrangement:
     """The arrangement whose matrix polynomial is regular and which recovers the most sample
     solutions (joint vectors drawn with a fixed seed; FK gives their poses) on the exact chain,
-    ties broken by the polynomial's conditioning."""
+    ties broken by the fewest starts (eigenvalues shared by several roots give a start per
+    root and cost a split: on the CRX-10iA every eigenvalue of the reversed k = 1 arrangement
+    is shared by two roots, none of the forward one's), then by the polynomial's
+    conditioning."""
     rng = np.random.default_rng(16)
     samples = rng.uniform(-math.pi, math.pi, size=(poses, 6))
     targets = [_inverse(solver.table.base) @ solver.table.fk(q) @ _inverse(solver.table.tool)
                for q in samples]
-    best: tuple[float, float] | None = None
+    best: tuple[float, float, float] | None = None
     choice: Arrangement | None = None
     for reversed_ in (False, True):
         for k in (1, 2, 0):
@@ -100,13 +103,14 @@ def choose_arrangement(solver: EliminatingSolver, poses: int = 12) -> Arrangemen
             regular = regularity(solver, el, targets[0], arrangement)
             if regular < SINGULAR_PENCIL:
                 continue
-            recovered = 0
+            recovered, starts = 0, 0
             data = solver.kernel_data(arrangement, el)
             for q, T_dh in zip(samples, targets, strict=True):
                 cands = solver.compiled_candidates(T_dh, data)
+                starts += cands.shape[0]
                 if cands.shape[0] and np.min(np.max(np.abs(wrap(cands - q)), axis=1)) < 1e-6:
                     recovered += 1
-            score = (recovered, regular)
+            score = (recovered, -starts, regular)
             if best is None or score > best:
                 best, choice = score, arrangement
     if choice is None:

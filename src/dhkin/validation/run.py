@@ -82,6 +82,7 @@ from dhkin.transforms import pose_error
 from dhkin.validation import arguments
 from dhkin.validation.adapters import IKCallable, own_ik
 from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, CallResult, IKCaller, takes_seed
+from dhkin.validation.multistart import RootReference, check_reference, needs_reference
 from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
 from dhkin.validation.report import OUTCOMES, SampleResult, ValidationReport
 from dhkin.validation.samples import (
@@ -89,8 +90,10 @@ from dhkin.validation.samples import (
     SEED_PERTURBATION,
     WRIST_JOINT,
     perturbed_seeds,
+    reference_samples,
     sample_joint_vectors,
 )
+from dhkin.validation.verify import verify_solutions
 
 #: |sin q5| at or below which a sample is on the wrist singularity for the missing check.
 WRIST_SINGULAR = 1e-6
@@ -113,7 +116,10 @@ def _wrap(robot: Arm, difference: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _configuration_labels(robot: Arm, targets: NDArray[np.float64],
                           q: NDArray[np.float64]) -> list[str]:
-    """Configuration of each sampled q according to dhkin's closed-form solver ('' if none)."""
+    """Configuration of each sampled q according to dhkin's closed-form solver ('' if none:
+    the general 6R solver's roots have no labels, and it is not called for them)."""
+    if robot.ik_family == "general6r":
+        return [""] * q.shape[0]
     try:
         batch = robot.ik_batch_detailed(targets)
     except FamilyError:
@@ -177,30 +183,6 @@ def _matched(robot: Arm, model: TargetModel, Q: NDArray[np.float64], q: NDArray[
     return found, closest
 
 
-def _verify(robot: Arm, model: TargetModel, T: NDArray[np.float64],
-            returned: list[NDArray[np.float64]], tolerance: float
-            ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], str]:
-    """Finite solutions, their residuals on the reference, and what is wrong with them ('')."""
-    dof = robot.dof
-    good = [s for s in returned if s.shape == (dof,) and np.all(np.isfinite(s))]
-    Q = np.array(good, dtype=float).reshape(len(good), dof)
-    position: NDArray[np.float64] = np.zeros(0)
-    rotation: NDArray[np.float64] = np.zeros(0)
-    if len(Q):
-        position, rotation = pose_error(model.fk(Q), np.broadcast_to(T, (len(Q), 4, 4)))
-    if len(Q) < len(returned):
-        return Q, position, rotation, (f"{len(returned) - len(Q)} solution(s) not finite or "
-                                       f"not {dof} values")
-    if len(Q) and not np.all(robot.table.in_limits(Q)):
-        return Q, position, rotation, "a solution lies outside the joint limits"
-    allowed = tolerance + model.deviation
-    if len(Q) and (position.max() > allowed or rotation.max() > allowed):
-        return Q, position, rotation, (f"residual {position.max():.2e} m / "
-                                       f"{rotation.max():.2e} rad (allowed {allowed:.2e}: the "
-                                       f"tolerance + the reference's deviation from the table)")
-    return Q, position, rotation, ""
-
-
 def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64],
                   T: NDArray[np.float64], call: CallResult, tolerance: float,
                   joint_tolerance: float, seeded: bool) -> tuple[_Checked, NDArray[np.float64]]:
@@ -209,7 +191,7 @@ def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64]
     if call.problem:  # it raised, exited, timed out, or returned no list of joint vectors
         empty = np.zeros(0)
         return _Checked(call.outcome, call.problem, empty, empty), np.zeros((0, robot.dof))
-    Q, position, rotation, problem = _verify(robot, model, T, returned, tolerance)
+    Q, position, rotation, problem = verify_solutions(robot, model, T, returned, tolerance)
     if problem:
         return _Checked("wrong", problem, position, rotation), Q
     if not returned:
@@ -384,7 +366,10 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
     by_configuration: dict[str, Counter[str]] = {}
     all_position, all_rotation, n_solutions = [], [], []
     seeded = takes_seed(caller.ik)
-    check_branches = settings.complete_expected and robot.complete_ik
+    reference = (RootReference(robot, model)
+                 if settings.complete_expected and needs_reference(robot) else None)
+    check_branches = settings.complete_expected and robot.complete_ik and reference is None
+    referenced = reference_samples(sets)
     for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", settings.progress):
         call = caller(targets[k], q[k])
         returned = call.solutions
@@ -404,6 +389,11 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
                 detail = f"{len(lacking)} branch(es) not returned: " + "; ".join(
                     f"{name} (closest solution differs by {closest:.2e})"
                     for name, closest in lacking)
+        if outcome == "success" and reference is not None and referenced[k]:
+            report.branch_checked += 1
+            outcome, detail, missing = check_reference(
+                robot, model, caller, reference, targets[k], call if not seeded else None,
+                tolerance, joint_tolerance, all_position, all_rotation)
         returned_perturbed: list[NDArray[np.float64]] = []
         if outcome == "success" and seeded and np.all(np.isfinite(perturbed[k])):
             report.continuity_checked += 1
@@ -454,7 +444,7 @@ def _check_continuity(robot: Arm, model: TargetModel, caller: IKCaller, T: NDArr
     if call.problem:
         outcome = "wrong" if call.outcome == "wrong" else "discontinuous"
         return outcome, f"with the perturbed seed: {call.problem}", returned
-    Q, position, rotation, problem = _verify(robot, model, T, returned, tolerance)
+    Q, position, rotation, problem = verify_solutions(robot, model, T, returned, tolerance)
     all_position.append(position)
     all_rotation.append(rotation)
     if problem:

@@ -34,6 +34,22 @@ CONTINUITY_DISTANCE = 0.25
 CONTINUITY_SETS: tuple[str, ...] = ("special", "near_singular")
 
 
+#: Every this-many uniform sample is also checked against the multistart reference of an arm
+#: without a closed form (:mod:`dhkin.validation.multistart`), as is every special-angle and
+#: near-singular sample (where roots were lost: several share a joint value there): the
+#: reference costs ~6 ms per pose, a tenth of the uniform poses keeps a run's time near the
+#: IK's own.
+REFERENCE_EVERY = 10
+
+
+def reference_samples(sets: list[str]) -> NDArray[np.bool_]:
+    """Which samples the multistart reference checks: every special-angle and near-singular
+    one, and every :data:`REFERENCE_EVERY`-th uniform one."""
+    uniform_index = np.cumsum([s == "uniform" for s in sets]) - 1
+    return np.array([s != "uniform" or uniform_index[k] % REFERENCE_EVERY == 0
+                     for k, s in enumerate(sets)], dtype=np.bool_)
+
+
 def sample_joint_vectors(robot: Arm, n: int, seed: int) -> tuple[NDArray[np.float64],
                                                                     list[str]]:
     """n uniform + n/10 special-angle + n/10 near-singular joint vectors (at least 1 each)."""

@@ -20,13 +20,24 @@ from numba import types
 from numba.np.linalg import _LAPACK, ensure_lapack
 from numpy.typing import NDArray
 
-from dhkin.ik.compiled.general6r_null import MAX_SPLIT, null_space, null_vector, ratio_angle, split
+from dhkin.ik.compiled.general6r_back import back_substitute, rigid_inverse
+from dhkin.ik.compiled.general6r_null import MAX_SPLIT, null_space, null_vector, split
+from dhkin.ik.compiled.general6r_qz import pencil_eigenvalues
 from dhkin.ik.compiled.general6r_roots import nearest_copies, settle
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.pose import project, status
 
 ensure_lapack()
 _rgeev = _LAPACK().numba_ez_rgeev(types.float64)
+
+#: Layout of the ``setup`` vector: shift, k, reversed, scale, imaginary band.
+SHIFT, K, REVERSED, SCALE, BAND = 0, 1, 2, 3, 4
+
+
+#: The leading matrix is accepted when its reciprocal condition (1-norm) is at least this: the
+#: eigenvalues then lose at most ~1e-8 relative to rounding, well within Newton's basin.
+LEAD_CONDITION = 1e-8
+
 
 #: Eigenvalues of the eliminated joint whose angles (rad, real parts) lie closer than this
 #: are one cluster, split at each member into as many starts as the cluster has members
@@ -40,41 +51,20 @@ _rgeev = _LAPACK().numba_ez_rgeev(types.float64)
 CLUSTER = 1e-3
 
 
+#: A cluster whose eigenvalues (rad) lie within this of each other holds copies of one
+#: eigenvalue (their spread is rounding's, ~eps / the leading matrix's condition at worst:
+#: measured 3e-13 at the 99th percentile on the CRX-10iA, whose eigenvalues all come in
+#: pairs): its null space is split once, at their mean, not at each copy.
+COPY_SPREAD = 2.220446049250313e-16 / LEAD_CONDITION
+
+
 #: Most starts one elimination gives: 24 eigenvalues, each in a cluster split MAX_SPLIT ways.
 MAX_PER_POSE = 24 * MAX_SPLIT
 
 
-#: Most candidates one pose can give: the two moved poses of :func:`all_candidates`.
-MAX_CANDIDATES = 2 * MAX_PER_POSE
-
-
-#: Layout of the ``setup`` vector: shift, k, reversed, scale, imaginary band.
-SHIFT, K, REVERSED, SCALE, BAND = 0, 1, 2, 3, 4
-
-
-#: The leading matrix is accepted when its reciprocal condition (1-norm) is at least this: the
-#: eigenvalues then lose at most ~1e-8 relative to rounding, well within Newton's basin.
-LEAD_CONDITION = 1e-8
-
-
-@jit
-def _dh(theta: float, d: float, a: float, alpha: float, out: NDArray[np.float64]) -> None:
-    ct, st = math.cos(theta), math.sin(theta)
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = ct, -st * ca, st * sa, a * ct
-    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = st, ct * ca, -ct * sa, a * st
-    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = 0.0, sa, ca, d
-    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
-
-
-@jit
-def _rigid_inverse(T: NDArray[np.float64]) -> NDArray[np.float64]:
-    out = np.eye(4)
-    for r in range(3):
-        for c in range(3):
-            out[r, c] = T[c, r]
-        out[r, 3] = -(T[0, r] * T[0, 3] + T[1, r] * T[1, 3] + T[2, r] * T[2, 3])
-    return out
+#: Most candidates one pose can give: its own and the two moved poses' of
+#: :func:`all_candidates`.
+MAX_CANDIDATES = 3 * MAX_PER_POSE
 
 
 @jit
@@ -111,23 +101,32 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
                phi: NDArray[np.float64], D0_inverse: NDArray[np.float64],
                E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
                direction: NDArray[np.float64], offset: NDArray[np.float64],
-               T_dh: NDArray[np.float64], out: NDArray[np.float64],
-               paired: NDArray[np.bool_], info: NDArray[np.float64]) -> int:
+               dggev: object, solve_ill: bool, T_dh: NDArray[np.float64],
+               out: NDArray[np.float64], paired: NDArray[np.bool_],
+               info: NDArray[np.float64]) -> int:
     """Joint values of every root the eigenproblem of the target T_dh (4, 4), DH frame 0 ->
     DH frame 6 of the exact chain, holds, into the rows of out; returns their number (at most
-    out's rows). paired[i]: row i comes from a complex pair of eigenvalues (its imaginary
+    out's rows). The eigenvalues come from dgeev on the companion matrix where the leading
+    matrix is well conditioned, else (``solve_ill``; none without it) from QZ on the pencil
+    (``dggev``: :data:`dhkin.ik.compiled.general6r_qz.DGGEV`).
+    paired[i]: row i comes from a complex pair of eigenvalues (its imaginary
     angle beyond CLUSTER, within the band). info[0]: the reciprocal condition (1-norm) of
     the leading matrix used (below LEAD_CONDITION: no angle gave a well-conditioned one, the
     pose's eigenproblem is ill-conditioned; NaN: the pose's quantities are not finite, no
-    candidate).
+    candidate); info[1]: 1 where a cluster holds more than MAX_SPLIT eigenvalues (a curve of
+    solutions with all its members at one value of the eliminated joint: a defective
+    multiple eigenvalue whose computed copies scatter by eps^(1 / order), ~1e-3 at order 12
+    on the CRX-10iA, and whose null space holds the curve's vectors besides the roots'),
+    else 0.
 
     Near-real eigenvalues (angle's imaginary part within the band) whose angles lie within
     CLUSTER of each other are one cluster of m: at each distinct member the m-dimensional
     null space of M is split into one monomial vector per root
     (:func:`dhkin.ik.compiled.general6r_null.split`; m = 1: inverse iteration), and each
-    vector's joints are back-substituted (:func:`_back_substitute`)."""
+    vector's joints are back-substituted
+    (:func:`dhkin.ik.compiled.general6r_back.back_substitute`)."""
     shift, k, reverse = setup[SHIFT], int(setup[K]), setup[REVERSED] != 0.0
-    target = _rigid_inverse(T_dh) if reverse else T_dh
+    target = rigid_inverse(T_dh) if reverse else T_dh
     H = D0_inverse @ target @ E_inverse
     for r in range(3):
         H[r, 3] /= setup[SCALE]
@@ -170,6 +169,7 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
         if ratio >= LEAD_CONDITION:
             break
     info[0] = best
+    info[1] = 0.0
     # B and C of M(x) = A x^2 + B x + C with theta_k = lead + 2 atan(x)
     cs, sn = math.cos(lead), math.sin(lead)
     W = (Ps * cs - Pc * sn) @ half2
@@ -177,35 +177,47 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
     Bm[:6, :9] = 2.0 * W
     Bm[6:, 3:] = 2.0 * W
     C = _sigma(Pc, Ps, P1, lead, half2)
-    AC, AB = A_inverse @ C, A_inverse @ Bm
-    # companion, stored column-major (LAPACK): work[j, i] = K[i, j]
-    work = np.zeros((24, 24))
-    for i in range(12):
-        work[12 + i, i] = 1.0
-        for j in range(12):
-            work[j, 12 + i] = -AC[i, j]
-            work[12 + j, 12 + i] = -AB[i, j]
-    for i in range(24):
-        for j in range(24):
-            if not abs(work[i, j]) < math.inf:
-                return 0  # the leading matrix exactly singular at all four angles
     wr, wi = np.empty(24), np.empty(24)
-    vl = np.empty((1, 24))
-    vr = np.empty((1, 24))  # not computed: eigenvalues only (null vectors below)
-    status = _rgeev(ord("d"), ord("N"), ord("N"), 24, work.ctypes, 24, wr.ctypes, wi.ctypes,
-                    vl.ctypes, 24, vr.ctypes, 24)
-    if status != 0:
-        return 0
+    if best >= LEAD_CONDITION:
+        AC, AB = A_inverse @ C, A_inverse @ Bm
+        # companion, stored column-major (LAPACK): work[j, i] = K[i, j]
+        work = np.zeros((24, 24))
+        for i in range(12):
+            work[12 + i, i] = 1.0
+            for j in range(12):
+                work[j, 12 + i] = -AC[i, j]
+                work[12 + j, 12 + i] = -AB[i, j]
+        vl = np.empty((1, 24))
+        vr = np.empty((1, 24))  # not computed: eigenvalues only (null vectors below)
+        status = _rgeev(ord("d"), ord("N"), ord("N"), 24, work.ctypes, 24, wr.ctypes,
+                        wi.ctypes, vl.ctypes, 24, vr.ctypes, 24)
+        if status != 0:
+            return 0
+    else:
+        if not solve_ill:
+            return 0
+        left = np.zeros((24, 24))
+        right = np.eye(24)
+        for i in range(12):
+            left[i, 12 + i] = 1.0
+            for j in range(12):
+                left[12 + i, j] = -C[i, j]
+                left[12 + i, 12 + j] = -Bm[i, j]
+                right[12 + i, 12 + j] = A[i, j]
+        if not pencil_eigenvalues(dggev, left, right, wr, wi):
+            return 0
     # near-real eigenvalues as angles (real, imaginary part), sorted by the real part
     real = np.empty(24)
     imaginary = np.empty(24)
     kept = 0
     for index in range(24):
         x = complex(wr[index], wi[index])
-        if abs(x) > 1e150:
-            continue
-        angle = 2.0 * np.arctan(x)
+        # x = infinity is theta_k = lead + pi (only QZ gives it: the leading matrix is
+        # singular there); beyond 1e150 the angle is pi to the last bit
+        angle = complex(math.pi, 0.0) if abs(x) > 1e150 else 2.0 * np.arctan(x)
         if not (abs(angle.imag) <= setup[BAND]):
+            continue
+        if not (abs(angle.real) < math.inf):
             continue
         if wi[index] < 0.0 and abs(angle.imag) > CLUSTER:
             continue  # a pair's second member gives the same real part
@@ -229,10 +241,14 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
         while last < kept and real[last] - real[last - 1] < CLUSTER:
             last += 1
         m = min(last - first, MAX_SPLIT)
+        copies = real[last - 1] - real[first] <= COPY_SPREAD
+        if last - first > MAX_SPLIT:
+            info[1] = 1.0  # more roots at one value than a split separates: a curve
         for member in range(first, last):
-            if member > first and real[member] == real[member - 1]:
-                continue  # the two members of a pair: one null space
-            half = 0.5 * real[member]
+            if member > first and (copies or real[member] == real[member - 1]):
+                continue  # copies of one eigenvalue, or the two members of a pair
+            angle = 0.5 * (real[first] + real[last - 1]) if copies else real[member]
+            half = 0.5 * angle
             if m == 1:
                 if not null_vector(A, Bm, C, half, vectors[0]):
                     continue
@@ -244,64 +260,12 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
             for v in range(m):
                 if count >= out.shape[0]:
                     return count
-                _back_substitute(P, Qpinv, r_vec, rows, phi, direction, offset, k, reverse, H,
-                                 lead + real[member], vectors[v], out[count])
+                back_substitute(P, Q, rank, Qpinv, r_vec, rows, phi, direction, offset, k,
+                                reverse, H, lead + angle, vectors[v], out[count])
                 paired[count] = abs(imaginary[member]) > CLUSTER
                 count += 1
         first = last
     return count
-
-
-@jit
-def _back_substitute(P: NDArray[np.float64], Qpinv: NDArray[np.float64],
-                     r_vec: NDArray[np.float64], rows: NDArray[np.float64],
-                     phi: NDArray[np.float64], direction: NDArray[np.float64],
-                     offset: NDArray[np.float64], k: int, reverse: bool,
-                     H: NDArray[np.float64], theta_k: float, vector: NDArray[np.float64],
-                     out: NDArray[np.float64]) -> None:
-    """The joint values (URDF, 6) of the model angles theta_k (the eigenvalue) and those of
-    the monomial vector (theta_k+1, theta_k+2), into out: the right side's two joints from
-    the 14 equations (least squares, Qpinv), the dropped joint from the orientation."""
-    theta = np.empty(6)
-    x45 = np.empty(9)
-    T1 = np.empty((4, 4))
-    theta_1 = ratio_angle(vector, False)
-    theta_2 = ratio_angle(vector, True)
-    theta[k], theta[k + 1], theta[k + 2] = theta_k, theta_1, theta_2
-    b0 = (math.cos(theta_k), math.sin(theta_k), 1.0)
-    b1 = (math.cos(theta_1), math.sin(theta_1), 1.0)
-    b2 = (math.cos(theta_2), math.sin(theta_2), 1.0)
-    for i in range(3):
-        for j in range(3):
-            x45[3 * i + j] = b1[i] * b2[j]
-    rhs = (P[0] * b0[0] + P[1] * b0[1] + P[2]) @ x45 - r_vec
-    y = Qpinv @ rhs
-    first, second = -1, -1
-    for j in range(6):
-        if j < k or j > k + 3:
-            if first < 0:
-                first = j
-            else:
-                second = j
-    theta[first] = math.atan2(y[5], y[2])
-    theta[second] = math.atan2(y[7], y[6])
-    g = k + 3
-    pre = np.eye(4)
-    for j in range(g):
-        _dh(theta[j], rows[j, 0], rows[j, 1], rows[j, 2], T1)
-        pre = pre @ T1
-    post = np.eye(4)
-    for j in range(g + 1, 6):
-        _dh(theta[j], rows[j, 0], rows[j, 1], rows[j, 2], T1)
-        post = post @ T1
-    A_g = _rigid_inverse(pre) @ H @ _rigid_inverse(post)
-    theta[g] = math.atan2(A_g[1, 0], A_g[0, 0])
-    for j in range(6):
-        v = theta[j] - phi[j]
-        if reverse:
-            out[5 - j] = (-v - offset[5 - j]) / direction[5 - j]
-        else:
-            out[j] = (v - offset[j]) / direction[j]
 
 
 @jit
@@ -312,29 +276,32 @@ def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
                    D0_inverse: NDArray[np.float64], E_inverse: NDArray[np.float64],
                    setup: NDArray[np.float64], direction: NDArray[np.float64],
                    offset: NDArray[np.float64], perturbations: NDArray[np.float64],
-                   T_dh: NDArray[np.float64], out: NDArray[np.float64],
+                   dggev: object, T_dh: NDArray[np.float64], out: NDArray[np.float64],
                    paired: NDArray[np.bool_], info: NDArray[np.float64]) -> int:
-    """:func:`candidates` of T_dh, or where its eigenproblem is ill-conditioned (info[0] below
-    LEAD_CONDITION: the matrix polynomial is singular, or nearly, at this pose) those of the
-    poses ``perturbations[p] @ T_dh`` (small rigid motions in DH frame 0,
-    :func:`dhkin.ik.general6r.perturbations`), whose eigenproblems are regular: every real
-    root of a perturbed pose is among its eigenvalues, and every regular root of T_dh lies
-    near one of them, within Newton's reach (docs/general6r.md, "Every root"). info[0]: the
-    leading matrix's reciprocal condition at T_dh; info[1]: 1 where the perturbed poses were
-    used, else 0."""
+    """:func:`candidates` of T_dh; where its eigenproblem is ill-conditioned (info[0] below
+    LEAD_CONDITION: the matrix polynomial is singular, or nearly, at this pose) instead, and
+    where an eigenvalue is degenerate (a curve of solutions at one value of the eliminated
+    joint) as well, those of the poses ``perturbations[p] @ T_dh`` (small rigid motions in
+    DH frame 0, :func:`dhkin.ik.general6r.perturbations`), whose eigenproblems are regular
+    (solved by QZ where still ill-conditioned) with simple eigenvalues: every real root of a
+    moved pose is among its eigenvalues, and
+    every regular root of T_dh lies near one of them, within Newton's reach
+    (docs/general6r.md, "Every root"). info[0]: the leading matrix's reciprocal condition at
+    T_dh; info[1]: 1 where the moved poses were used, else 0."""
     count = candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
-                       E_inverse, setup, direction, offset, T_dh, out, paired, info)
-    info[1] = 0.0
-    if info[0] >= LEAD_CONDITION or math.isnan(info[0]):
+                       E_inverse, setup, direction, offset, dggev, False, T_dh, out, paired,
+                       info)
+    if math.isnan(info[0]):
+        return count
+    if info[0] >= LEAD_CONDITION and info[1] == 0.0:
         return count
     info[1] = 1.0
-    count = 0
     inner = np.empty(2)
     for p in range(perturbations.shape[0]):
         moved = np.ascontiguousarray(perturbations[p]) @ T_dh
         count += candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
-                            E_inverse, setup, direction, offset, moved, out[count:],
-                            paired[count:], inner)
+                            E_inverse, setup, direction, offset, dggev, True, moved,
+                            out[count:], paired[count:], inner)
     return count
 
 
@@ -359,7 +326,8 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
                phi: NDArray[np.float64], D0_inverse: NDArray[np.float64],
                E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
                direction: NDArray[np.float64], offset: NDArray[np.float64],
-               perturbations: NDArray[np.float64], base_inverse: NDArray[np.float64],
+               perturbations: NDArray[np.float64], dggev: object,
+               base_inverse: NDArray[np.float64],
                tool_inverse: NDArray[np.float64], chain: NDArray[np.float64],
                T: NDArray[np.float64], seed: NDArray[np.float64], reach: float,
                tolerance: float, lever: float, band: float, lower: NDArray[np.float64],
@@ -391,8 +359,8 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
         return -1
     eigen = np.empty(2)
     count = all_candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
-                           E_inverse, setup, direction, offset, perturbations, T_dh, starts,
-                           paired, eigen)
+                           E_inverse, setup, direction, offset, perturbations, dggev, T_dh,
+                           starts, paired, eigen)
     found, failed = settle(chain, tip_target, starts, paired, count, tolerance, lever, band,
                            roots, errors, sigmas)
     info[FAILED] = failed
@@ -402,7 +370,7 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
         if sigmas[k] <= band:
             return -1
     count = nearest_copies(chain, tip_target, roots, errors, found, seed, lower, upper, slack,
-                           tolerance, out_q, out_errors, kept)
+                           tolerance, lever, out_q, out_errors, kept)
     return count if count > 0 else -1
 
 

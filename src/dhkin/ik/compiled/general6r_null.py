@@ -42,6 +42,12 @@ MAX_SPLIT = 8
 ROTATIONS = MAX_SPLIT + 1
 
 
+#: The gammas of :func:`split` are tried until the eigenvalues of X + gamma Y lie at least
+#: this far apart relative to their size: an eigenvector is then accurate to about
+#: eps / this (sqrt(eps), ~1.5e-8: a start well within Newton's reach).
+SEPARATED = math.sqrt(2.220446049250313e-16)
+
+
 @jit
 def null_vector(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64],
                 half: float, out: NDArray[np.float64]) -> bool:
@@ -105,8 +111,10 @@ def null_space(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.flo
 def _shift_operator(V: NDArray[np.float64], along_b: bool) -> NDArray[np.float64]:
     """X (m, m) with X c = t c for the coordinates c of every monomial vector V c in the span
     of V (12, m), t = tan(half angle - delta) of joint a (``along_b`` False: rows i <= 2 and
-    i >= 1) or joint b (rows j <= 1 and j >= 1), delta the rotation of :data:`ROTATIONS` whose
-    low rows R0 V are best conditioned (see the module docstring)."""
+    i >= 1) or joint b (rows j <= 1 and j >= 1), delta the first rotation of
+    :data:`ROTATIONS` whose low rows R0 V have a reciprocal condition of at least
+    :data:`SEPARATED` (X is then accurate to ~sqrt(eps)), else the best conditioned (see the
+    module docstring)."""
     m = V.shape[1]
     n_rows = 8 if along_b else 9
     low = np.empty((n_rows, m))
@@ -142,6 +150,8 @@ def _shift_operator(V: NDArray[np.float64], along_b: bool) -> NDArray[np.float64
                 for c in range(m):
                     projected[r, c] /= sv[r] if sv[r] > 0.0 else 1.0
             result = np.ascontiguousarray(Wt.T) @ projected
+        if score >= SEPARATED:
+            break
     return result
 
 
@@ -149,7 +159,8 @@ def _shift_operator(V: NDArray[np.float64], along_b: bool) -> NDArray[np.float64
 def split(V: NDArray[np.float64], out: NDArray[np.float64]) -> None:
     """The monomial vector of every root whose null vectors span V (12, m), m >= 2, into the
     rows of out (m, 12), each up to scale (see the module docstring): eigenvectors of
-    X + gamma Y for the gamma among m (m - 1) / 2 + 1 whose eigenvalues are farthest apart.
+    X + gamma Y for the first gamma whose eigenvalues lie :data:`SEPARATED` apart, else the
+    one among m (m - 1) / 2 + 1 whose eigenvalues are farthest apart.
     A complex eigenvector (a direction of V that is no real root) gives the real part of its
     vector, phase-aligned on its largest entry: a start that Newton may reject."""
     m = V.shape[1]
@@ -163,12 +174,16 @@ def split(V: NDArray[np.float64], out: NDArray[np.float64]) -> None:
         Z = (X + gamma * Y).astype(np.complex128)
         values, candidates = np.linalg.eig(Z)
         gap = math.inf
+        size = 0.0
         for a in range(m):
+            size = max(size, abs(values[a]))
             for b in range(a):
                 gap = min(gap, abs(values[a] - values[b]))
         if gap > best:
             best = gap
             vectors[:, :] = candidates
+        if gap >= SEPARATED * max(size, 1.0):
+            break
     Vc = V.astype(np.complex128)
     for r in range(m):
         v = Vc @ np.ascontiguousarray(vectors[:, r])

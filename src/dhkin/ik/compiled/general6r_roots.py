@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from dhkin.ik.compiled.chain import (
     MAX_JOINT_STEP,
+    MAX_STEPS,
     REFINE_FRACTION,
     _jacobian,
     check,
@@ -134,22 +135,26 @@ def refine_tolerance(tolerance: float, lever: float) -> float:
 def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
                    roots: NDArray[np.float64], errors: NDArray[np.float64], found: int,
                    reference: NDArray[np.float64], lower: NDArray[np.float64],
-                   upper: NDArray[np.float64], slack: float, tolerance: float,
+                   upper: NDArray[np.float64], slack: float, tolerance: float, lever: float,
                    out_q: NDArray[np.float64], out_errors: NDArray[np.float64],
                    kept: NDArray[np.int64]) -> int:
     """Per root, per joint its 2pi copy nearest ``reference`` within the limits widened by
-    ``slack`` (a value that far outside a limit counts as on it: set onto it and verified
-    again on ``chain`` against T (3 or 4 rows) at ``tolerance``, as in the families); roots
-    without such a copy, or that no longer verify, are left out. Writes the kept rows in
-    order into out_q, out_errors and their root indices into kept; returns their number."""
+    ``slack`` (a value that far outside a limit counts as on it, as in the families: set onto
+    it, the other joints refined by monotone Newton steps with it held there (a root on the
+    limit up to rounding is then exact again), and verified on ``chain`` against T (3 or 4
+    rows) at ``tolerance``); roots without such a copy, or that no longer verify, are left
+    out. Writes the kept rows in order into out_q, out_errors and their root indices into
+    kept; returns their number."""
     two_pi = 2.0 * math.pi
     target = np.ascontiguousarray(T[:3])
     state = np.empty(12)
     q = np.empty(6)
+    held = np.zeros(6, np.bool_)
     count = 0
     for k in range(found):
         inside, moved = True, False
         for j in range(6):
+            held[j] = False
             value = roots[k, j] + two_pi * np.rint((reference[j] - roots[k, j]) / two_pi)
             if value < lower[j] - slack:
                 value += two_pi * math.ceil((lower[j] - slack - value) / two_pi)
@@ -159,14 +164,18 @@ def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
                 inside = False
                 break
             if value < lower[j]:
-                value, moved = lower[j], True
+                value, moved, held[j] = lower[j], True, True
             elif value > upper[j]:
-                value, moved = upper[j], True
+                value, moved, held[j] = upper[j], True, True
             q[j] = value
         if not inside:
             continue
         position, rotation = errors[k, 0], errors[k, 1]
         if moved:
+            refine(chain, target, q, held, refine_tolerance(tolerance, lever), BUDGET, 1.0,
+                   0.0)
+            for j in range(6):
+                q[j] = min(max(q[j], lower[j]), upper[j])
             position, rotation = check(chain, q, target, state)
             if not (position <= tolerance and rotation <= tolerance):
                 continue
@@ -176,3 +185,108 @@ def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
         kept[count] = k
         count += 1
     return count
+
+
+#: Trial steps of :func:`walk` (a failed step is retried a quarter as long): on a curved
+#: solution set the midpoint of a chord of length L lies ~kappa L^2 / 8 off it, so long steps
+#: fail where short ones pass (a CRX-10iA pose at q5 = 0 whose members 1.6 rad apart needed
+#: steps of ~0.05 rad); 100 trials walk ~3 rad at that length, beyond any seed within the
+#: continuity distance of a member.
+WALK_STEPS = 100
+
+
+@jit
+def walk(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
+         seed: NDArray[np.float64], tolerance: float, lever: float, band: float,
+         error: NDArray[np.float64]) -> None:
+    """A singular root q (in place) moved along the solutions towards ``seed``: the member of a
+    curve of solutions nearest the seed where a joint is free (docs/general6r.md). Each step
+    goes along the Jacobian's weak directions (singular values of the Jacobian, linear rows
+    over ``lever``, within ``band``) by the seed's offset projected onto them, at most
+    MAX_JOINT_STEP per joint, is refined by Newton on the exact chain (target T, 3 or 4 rows)
+    and kept while it verifies at ``tolerance``, comes nearer the seed and stays on the same
+    root (the midpoint of the step verifies too: the merging rule; near a fold Newton could
+    land on a distinct root nearer the seed); a failed step is retried a quarter as long,
+    down to ``band`` (:data:`WALK_STEPS` trials). Where the pose is only near-singular Newton
+    returns to the root, or lands on another one, and q does not move. error: the residuals
+    (position, rotation) of the final q, where it moved."""
+    target = np.ascontiguousarray(T[:3])
+    fixed = np.zeros(6, np.bool_)
+    state = np.empty(12)
+    frames = np.empty((7, 12))
+    J = np.empty((6, 6))
+    step = np.empty(6)
+    offset = np.empty(6)
+    trial = np.empty(6)
+    middle = np.empty(6)
+    distance = 0.0
+    for j in range(6):
+        distance += _wrap(q[j] - seed[j]) ** 2
+    length = MAX_JOINT_STEP
+    _walk(chain, target, q, seed, tolerance, lever, band, error, distance, length, fixed,
+          state, frames, J, step, offset, trial, middle)
+    # polish: monotone Newton steps from the member reached (Newton converges slowly at a
+    # singular root; these bring its residual to REFINE_FRACTION of the tolerance)
+    for j in range(6):
+        trial[j] = q[j]
+    refine(chain, target, trial, fixed, refine_tolerance(tolerance, lever), 4 * MAX_STEPS,
+           1.0, 0.0)
+    position, rotation = check(chain, trial, target, state)
+    if position <= tolerance and rotation <= tolerance and max(position, rotation) < max(
+            error[0], error[1]):
+        for j in range(6):
+            q[j] = _wrap(trial[j])
+        error[0], error[1] = position, rotation
+
+
+@jit
+def _walk(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np.float64],
+          seed: NDArray[np.float64], tolerance: float, lever: float, band: float,
+          error: NDArray[np.float64], distance: float, length: float,
+          fixed: NDArray[np.bool_], state: NDArray[np.float64], frames: NDArray[np.float64],
+          J: NDArray[np.float64], step: NDArray[np.float64], offset: NDArray[np.float64],
+          trial: NDArray[np.float64], middle: NDArray[np.float64]) -> None:
+    """:func:`walk`'s steps (its work arrays passed in)."""
+    for _ in range(WALK_STEPS):
+        fk_frames(chain, q, frames)
+        _jacobian(chain, frames, J)
+        for r in range(3):
+            for c in range(6):
+                J[r, c] /= lever
+        _, sigma, Vt = np.linalg.svd(J)
+        for j in range(6):
+            offset[j] = _wrap(seed[j] - q[j])
+            step[j] = 0.0
+        for w in range(6):
+            if sigma[w] <= band:
+                along = 0.0
+                for j in range(6):
+                    along += Vt[w, j] * offset[j]
+                for j in range(6):
+                    step[j] += along * Vt[w, j]
+        longest = 0.0
+        for j in range(6):
+            longest = max(longest, abs(step[j]))
+        if longest <= band:
+            return
+        scale = length / longest if longest > length else 1.0
+        for j in range(6):
+            trial[j] = q[j] + scale * step[j]
+        refine(chain, target, trial, fixed, tolerance, 4 * MAX_STEPS, GROWTH, 0.0)
+        position, rotation = check(chain, trial, target, state)
+        trial_distance = 0.0
+        for j in range(6):
+            trial_distance += _wrap(trial[j] - seed[j]) ** 2
+            middle[j] = q[j] + 0.5 * _wrap(trial[j] - q[j])
+        between_position, between_rotation = check(chain, middle, target, state)
+        if not (position <= tolerance and rotation <= tolerance and trial_distance < distance
+                and between_position <= tolerance and between_rotation <= tolerance):
+            length = 0.25 * min(length, longest)
+            if length <= band:
+                return
+            continue
+        for j in range(6):
+            q[j] = _wrap(trial[j])
+        distance = trial_distance
+        error[0], error[1] = position, rotation
+        length = min(2.0 * length, MAX_JOINT_STEP)

@@ -133,7 +133,7 @@ class General6RSolver:
 
         out = np.empty((MAX_PER_POSE, 6))
         count = candidates(*(data or self._data), DGGEV, True, np.ascontiguousarray(T_dh), out,
-                           np.empty(MAX_PER_POSE, np.bool_), np.empty(2))
+                           np.empty(MAX_PER_POSE, np.int64), np.empty(2))
         return out[:count]
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
@@ -232,15 +232,15 @@ class General6RSolver:
         from dhkin.ik.compiled.general6r_qz import DGGEV
 
         starts = np.empty((MAX_CANDIDATES, 6))
-        paired = np.empty(MAX_CANDIDATES, np.bool_)
+        origin = np.empty(MAX_CANDIDATES, np.int64)
         info = np.empty(2)
         count = all_candidates(*self._data, self.perturbations, DGGEV,
-                               np.ascontiguousarray(T_dh), starts, paired, info)
+                               np.ascontiguousarray(T_dh), starts, origin, info)
         roots = np.empty((count, 6))
         errors = np.empty((count, 2))
         sigmas = np.empty(count)
         band = singular_band(tolerance)
-        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, paired, count,
+        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, origin, count,
                                tolerance, lever, band, roots, errors, sigmas)
         return roots[:found], errors[:found], failed, sigmas[:found] <= band
 
@@ -315,11 +315,11 @@ class General6RSolver:
 
     def _fast_buffers(self) -> tuple[NDArray[Any], ...]:
         """Per-thread work arrays of :func:`dhkin.ik.compiled.general6r.solve_pose`: starts,
-        paired, roots, errors, sigmas, out_q, out_errors, kept, info."""
+        origin, roots, errors, sigmas, out_q, out_errors, kept, info."""
         from dhkin.ik.compiled.general6r import MAX_CANDIDATES
 
         n = MAX_CANDIDATES
-        arrays = (np.empty((n, 6)), np.empty(n, np.bool_), np.empty((n, 6)), np.empty((n, 2)),
+        arrays = (np.empty((n, 6)), np.empty(n, np.int64), np.empty((n, 6)), np.empty((n, 2)),
                   np.empty(n), np.empty((n, 6)), np.empty((n, 2)), np.empty(n, np.int64),
                   np.empty(2))
         self._buffers.arrays = arrays

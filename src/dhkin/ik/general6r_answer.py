@@ -31,21 +31,33 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
                  singular: NDArray[np.bool_], seed: NDArray[np.float64],
                  chain: NDArray[np.float64], tip_target: NDArray[np.float64],
                  tolerance: float, lever: float) -> NDArray[np.bool_]:
-    """The seed's choice where a joint is free, in place: each singular root moves along
-    the solutions towards the seed (:func:`dhkin.ik.compiled.general6r_roots.walk`), as
-    the families' seeded candidate does (the member of the solution family nearest the seed,
-    docs/ik_core.md). The seed is never a start: the roots stay those the elimination found.
-    Returns which roots to keep: a root that walked onto an earlier one (their midpoint
-    verifies, the merging rule) is one root with it."""
+    """The seed's choice where a joint is free, in place, as the families' seeded candidate
+    (the member of the solution family nearest the seed, docs/ik_core.md): each singular root
+    moves along the solutions towards the seed (:func:`dhkin.ik.compiled.general6r_roots.walk`),
+    and is replaced by the point damped Newton reaches from the seed where that point is
+    singular, nearer the seed, and tied to the root by a segment of solutions
+    (:func:`~dhkin.ik.compiled.general6r_roots.on_segment`: a free pair of coincident axes,
+    where the weak directions of a cloud of near-solutions make walking stall). The seed is
+    never a root of its own: the roots stay those the elimination found. Returns which roots
+    to keep: a root that moved onto an earlier one (their midpoint verifies, the merging
+    rule) is one root with it."""
     from dhkin.ik.compiled.chain import MAX_JOINT_STEP, check
-    from dhkin.ik.compiled.general6r_roots import walk
+    from dhkin.ik.compiled.general6r_roots import on_segment, seed_projection, walk
 
     band = singular_band(tolerance)
     target = np.ascontiguousarray(tip_target[:3])
     seed = np.ascontiguousarray(seed, dtype=np.float64)
+    projected, projected_error = np.empty(6), np.empty(2)
+    reached = seed_projection(chain, target, seed, tolerance, lever, band, projected,
+                              projected_error)
+    distance_projected = float(np.sum(wrap(projected - seed) ** 2))
     for index in np.flatnonzero(singular):
         q = np.ascontiguousarray(roots[index])
         walk(chain, target, q, seed, tolerance, lever, band, errors[index])
+        if (reached and distance_projected < float(np.sum(wrap(q - seed) ** 2))
+                and on_segment(chain, target, q, projected, tolerance, lever, band)):
+            q = wrap(projected)
+            errors[index] = projected_error
         roots[index] = q
     keep = np.ones(roots.shape[0], np.bool_)
     state = np.empty(12)

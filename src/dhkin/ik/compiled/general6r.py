@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from dhkin.ik.compiled.general6r_back import back_substitute, rigid_inverse
 from dhkin.ik.compiled.general6r_null import MAX_SPLIT, null_space, null_vector, split
 from dhkin.ik.compiled.general6r_qz import pencil_eigenvalues
-from dhkin.ik.compiled.general6r_roots import nearest_copies, settle
+from dhkin.ik.compiled.general6r_roots import PAIRED, SHARED, nearest_copies, settle
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.pose import project, status
 
@@ -47,15 +47,11 @@ LEAD_CONDITION = 1e-8
 #: such copies by ~eps / (the leading matrix's condition) ~2e-8 at LEAD_CONDITION (a
 #: defective double eigenvalue, a fold, by ~its square root, 1.5e-4, but there one vector
 #: is the root's); a complex pair within it is such a shared real eigenvalue, split by
-#: rounding.
+#: rounding. Each member is split at its own value, not at the cluster's mean: two roots
+#: whose eliminated joints differ by 1e-7 rad and whose monomial vectors are nearly
+#: parallel (a CRX-10iA pose near q5 = 0, roots 8e-3 rad apart) are exact at their own
+#: members, mixed at the mean.
 CLUSTER = 1e-3
-
-
-#: A cluster whose eigenvalues (rad) lie within this of each other holds copies of one
-#: eigenvalue (their spread is rounding's, ~eps / the leading matrix's condition at worst:
-#: measured 3e-13 at the 99th percentile on the CRX-10iA, whose eigenvalues all come in
-#: pairs): its null space is split once, at their mean, not at each copy.
-COPY_SPREAD = 2.220446049250313e-16 / LEAD_CONDITION
 
 
 #: Most starts one elimination gives: 24 eigenvalues, each in a cluster split MAX_SPLIT ways.
@@ -102,22 +98,23 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
                E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
                direction: NDArray[np.float64], offset: NDArray[np.float64],
                dggev: object, solve_ill: bool, T_dh: NDArray[np.float64],
-               out: NDArray[np.float64], paired: NDArray[np.bool_],
+               out: NDArray[np.float64], origin: NDArray[np.int64],
                info: NDArray[np.float64]) -> int:
     """Joint values of every root the eigenproblem of the target T_dh (4, 4), DH frame 0 ->
     DH frame 6 of the exact chain, holds, into the rows of out; returns their number (at most
     out's rows). The eigenvalues come from dgeev on the companion matrix where the leading
     matrix is well conditioned, else (``solve_ill``; none without it) from QZ on the pencil
     (``dggev``: :data:`dhkin.ik.compiled.general6r_qz.DGGEV`).
-    paired[i]: row i comes from a complex pair of eigenvalues (its imaginary
-    angle beyond CLUSTER, within the band). info[0]: the reciprocal condition (1-norm) of
-    the leading matrix used (below LEAD_CONDITION: no angle gave a well-conditioned one, the
-    pose's eigenproblem is ill-conditioned; NaN: the pose's quantities are not finite, no
-    candidate); info[1]: 1 where a cluster holds more than MAX_SPLIT eigenvalues (a curve of
-    solutions with all its members at one value of the eliminated joint: a defective
-    multiple eigenvalue whose computed copies scatter by eps^(1 / order), ~1e-3 at order 12
-    on the CRX-10iA, and whose null space holds the curve's vectors besides the roots'),
-    else 0.
+    origin[i]: bits of where row i comes from: PAIRED, a complex pair of eigenvalues (its
+    imaginary angle beyond CLUSTER, within the band); SHARED, a cluster of eigenvalues (its
+    root's fold partner is probed, :func:`dhkin.ik.compiled.general6r_roots.settle`).
+    info[0]: the reciprocal condition (1-norm) of the leading matrix used (below
+    LEAD_CONDITION: no angle gave a well-conditioned one, the pose's eigenproblem is
+    ill-conditioned; NaN: the pose's quantities are not finite, no candidate). info[1]: 1
+    where a cluster holds more than MAX_SPLIT eigenvalues (a curve of solutions with all its
+    members at one value of the eliminated joint: a defective multiple eigenvalue whose
+    computed copies scatter by eps^(1 / order), ~1e-3 at order 12 on the CRX-10iA, and whose
+    null space holds the curve's vectors besides the roots'), else 0.
 
     Near-real eigenvalues (angle's imaginary part within the band) whose angles lie within
     CLUSTER of each other are one cluster of m: at each distinct member the m-dimensional
@@ -241,13 +238,12 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
         while last < kept and real[last] - real[last - 1] < CLUSTER:
             last += 1
         m = min(last - first, MAX_SPLIT)
-        copies = real[last - 1] - real[first] <= COPY_SPREAD
         if last - first > MAX_SPLIT:
             info[1] = 1.0  # more roots at one value than a split separates: a curve
         for member in range(first, last):
-            if member > first and (copies or real[member] == real[member - 1]):
-                continue  # copies of one eigenvalue, or the two members of a pair
-            angle = 0.5 * (real[first] + real[last - 1]) if copies else real[member]
+            if member > first and real[member] == real[member - 1]:
+                continue  # the two members of a pair: one null space
+            angle = real[member]
             half = 0.5 * angle
             if m == 1:
                 if not null_vector(A, Bm, C, half, vectors[0]):
@@ -262,7 +258,8 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
                     return count
                 back_substitute(P, Q, rank, Qpinv, r_vec, rows, phi, direction, offset, k,
                                 reverse, H, lead + angle, vectors[v], out[count])
-                paired[count] = abs(imaginary[member]) > CLUSTER
+                origin[count] = ((PAIRED if abs(imaginary[member]) > CLUSTER else 0)
+                                 | (SHARED if m > 1 else 0))
                 count += 1
         first = last
     return count
@@ -277,7 +274,7 @@ def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
                    setup: NDArray[np.float64], direction: NDArray[np.float64],
                    offset: NDArray[np.float64], perturbations: NDArray[np.float64],
                    dggev: object, T_dh: NDArray[np.float64], out: NDArray[np.float64],
-                   paired: NDArray[np.bool_], info: NDArray[np.float64]) -> int:
+                   origin: NDArray[np.int64], info: NDArray[np.float64]) -> int:
     """:func:`candidates` of T_dh; where its eigenproblem is ill-conditioned (info[0] below
     LEAD_CONDITION: the matrix polynomial is singular, or nearly, at this pose) instead, and
     where an eigenvalue is degenerate (a curve of solutions at one value of the eliminated
@@ -289,7 +286,7 @@ def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
     (docs/general6r.md, "Every root"). info[0]: the leading matrix's reciprocal condition at
     T_dh; info[1]: 1 where the moved poses were used, else 0."""
     count = candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
-                       E_inverse, setup, direction, offset, dggev, False, T_dh, out, paired,
+                       E_inverse, setup, direction, offset, dggev, False, T_dh, out, origin,
                        info)
     if math.isnan(info[0]):
         return count
@@ -301,7 +298,7 @@ def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
         moved = np.ascontiguousarray(perturbations[p]) @ T_dh
         count += candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
                             E_inverse, setup, direction, offset, dggev, True, moved,
-                            out[count:], paired[count:], inner)
+                            out[count:], origin[count:], inner)
     return count
 
 
@@ -332,7 +329,7 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
                T: NDArray[np.float64], seed: NDArray[np.float64], reach: float,
                tolerance: float, lever: float, band: float, lower: NDArray[np.float64],
                upper: NDArray[np.float64], slack: float, starts: NDArray[np.float64],
-               paired: NDArray[np.bool_], roots: NDArray[np.float64],
+               origin: NDArray[np.int64], roots: NDArray[np.float64],
                errors: NDArray[np.float64], sigmas: NDArray[np.float64],
                out_q: NDArray[np.float64], out_errors: NDArray[np.float64],
                kept: NDArray[np.int64], info: NDArray[np.float64]) -> int:
@@ -360,8 +357,8 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
     eigen = np.empty(2)
     count = all_candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
                            E_inverse, setup, direction, offset, perturbations, dggev, T_dh,
-                           starts, paired, eigen)
-    found, failed = settle(chain, tip_target, starts, paired, count, tolerance, lever, band,
+                           starts, origin, eigen)
+    found, failed = settle(chain, tip_target, starts, origin, count, tolerance, lever, band,
                            roots, errors, sigmas)
     info[FAILED] = failed
     if found == 0:

@@ -18,6 +18,7 @@ from dhkin.ik.compiled.chain import (
     MAX_JOINT_STEP,
     MAX_STEPS,
     REFINE_FRACTION,
+    SEED_DAMPING,
     _jacobian,
     check,
     fk_frames,
@@ -71,13 +72,16 @@ def smallest_singular(chain: NDArray[np.float64], q: NDArray[np.float64], lever:
 
 @jit
 def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArray[np.float64],
-           paired: NDArray[np.bool_], n_starts: int, tolerance: float, lever: float,
+           origin: NDArray[np.int64], n_starts: int, tolerance: float, lever: float,
            band: float, roots: NDArray[np.float64], errors: NDArray[np.float64],
            sigmas: NDArray[np.float64]) -> tuple[int, int]:
     """Refine every start on the exact chain, keep those that verify at ``tolerance``, merge
     those that are one root (close, and their midpoint verifies). Only the elimination's
     candidates are starts: the seed never is (it chooses among the roots, it does not find
-    them). Starts marked ``paired`` (near-real complex pairs of eigenvalues) get PAIR_BUDGET.
+    them). Starts whose ``origin`` has PAIRED (near-real complex pairs of eigenvalues) get
+    PAIR_BUDGET; the roots reached from SHARED ones (a cluster of eigenvalues) have their
+    fold partner probed where their singular value is at most PROBE_SIGMA
+    (:func:`fold_partner`).
     Newton runs until the residual is REFINE_FRACTION of the tolerance on the oracle's FK too
     (:func:`refine_tolerance`). Returns (roots found, candidates that did not verify); sigmas:
     :func:`smallest_singular` of each root (``lever``, ``band``)."""
@@ -87,11 +91,12 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
     q = np.empty(6)
     middle = np.empty(6)
     goal = refine_tolerance(tolerance, lever)
+    probe = np.zeros(roots.shape[0], np.bool_)
     found, failed = 0, 0
     for index in range(n_starts):
         for j in range(6):
             q[j] = starts[index, j]
-        budget = PAIR_BUDGET if paired[index] else BUDGET
+        budget = PAIR_BUDGET if origin[index] & PAIRED else BUDGET
         refine(chain, target, q, fixed, goal, budget, GROWTH, 0.0)
         position, rotation = check(chain, q, target, state)
         if not (position <= tolerance and rotation <= tolerance):
@@ -99,21 +104,35 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
             continue
         for j in range(6):
             q[j] = _wrap(q[j])
-        duplicate = False
-        for other in range(found):
-            largest = 0.0
-            for j in range(6):
-                middle[j] = _wrap(q[j] - roots[other, j])
-                largest = max(largest, abs(middle[j]))
-            if largest > MAX_JOINT_STEP:
-                continue
-            for j in range(6):
-                middle[j] = roots[other, j] + 0.5 * middle[j]
-            p2, r2 = check(chain, middle, target, state)
-            if p2 <= tolerance and r2 <= tolerance:
-                duplicate = True
-                break
-        if duplicate:
+        duplicate = _known(chain, target, q, roots, found, tolerance, middle, state)
+        if duplicate >= 0:
+            probe[duplicate] = probe[duplicate] or (origin[index] & SHARED) != 0
+            continue
+        for j in range(6):
+            roots[found, j] = q[j]
+        errors[found, 0], errors[found, 1] = position, rotation
+        sigmas[found] = smallest_singular(chain, q, lever, band)
+        probe[found] = (origin[index] & SHARED) != 0
+        found += 1
+    # near a fold, the partner of each root with a small singular value (its eliminated joint
+    # may equal this one's to the eigenvalues' accuracy)
+    partner = np.empty(6)
+    known = found
+    for index in range(known):
+        if found >= roots.shape[0]:
+            break
+        if not probe[index]:
+            continue
+        if smallest_singular(chain, roots[index], lever, PROBE_SIGMA) > PROBE_SIGMA:
+            continue
+        if not fold_partner(chain, target, roots[index], lever, goal, partner):
+            continue
+        position, rotation = check(chain, partner, target, state)
+        if not (position <= tolerance and rotation <= tolerance):
+            continue
+        for j in range(6):
+            q[j] = _wrap(partner[j])
+        if _known(chain, target, q, roots, found, tolerance, middle, state) >= 0:
             continue
         for j in range(6):
             roots[found, j] = q[j]
@@ -121,6 +140,90 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
         sigmas[found] = smallest_singular(chain, q, lever, band)
         found += 1
     return found, failed
+
+
+@jit
+def _known(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np.float64],
+           roots: NDArray[np.float64], found: int, tolerance: float,
+           middle: NDArray[np.float64], state: NDArray[np.float64]) -> int:
+    """The index of the root among the first ``found`` that q is one root with (within
+    MAX_JOINT_STEP, and their midpoint verifies at ``tolerance``), or -1."""
+    for other in range(found):
+        largest = 0.0
+        for j in range(6):
+            middle[j] = _wrap(q[j] - roots[other, j])
+            largest = max(largest, abs(middle[j]))
+        if largest > MAX_JOINT_STEP:
+            continue
+        for j in range(6):
+            middle[j] = roots[other, j] + 0.5 * middle[j]
+        position, rotation = check(chain, middle, target, state)
+        if position <= tolerance and rotation <= tolerance:
+            return other
+    return -1
+
+
+#: Bits of a start's origin (:func:`dhkin.ik.compiled.general6r.candidates`): a near-real
+#: complex pair of eigenvalues, a cluster of eigenvalues.
+PAIRED, SHARED = 1, 2
+
+
+#: Roots whose smallest singular value (scaled Jacobian) is at most this get their fold
+#: partner probed (:func:`fold_partner`). Near a fold two roots lie d ~ 2 sigma / kappa apart
+#: along the weak direction (kappa: the curvature there, ~1 rad^-1 on arms of order-one
+#: lengths); where that direction has no component along the eliminated joint, their
+#: eliminated joints differ only to second order, ~d^2, and the eigenvalues (accurate to
+#: ~1e-6 at a CRX-10iA pose near q5 = 0) can no longer tell them apart: a pair 8e-3 rad
+#: apart (sigma 1.5e-4) shared an eigenvalue to 1.7e-7. Above 1e-2, d^2 > 1e-4.
+PROBE_SIGMA = 1e-2
+
+
+#: Step (rad) of the central difference of the Jacobian along the weak direction in
+#: :func:`fold_partner` (second-derivative error ~h^2, rounding ~eps / h).
+PROBE_STEP = 1e-5
+
+
+@jit
+def fold_partner(chain: NDArray[np.float64], target: NDArray[np.float64],
+                 q: NDArray[np.float64], lever: float, goal: float,
+                 out: NDArray[np.float64]) -> bool:
+    """The fold partner of the root q, refined by Newton into out: along the Jacobian's
+    weakest right singular vector v (sigma, left vector u; linear rows over ``lever``), the
+    pose error is ~ t sigma u + t^2 / 2 kappa u with kappa = u . d2F[v, v] (a central
+    difference of the Jacobian along v), zero again at t = -2 sigma / kappa. False where
+    that lies beyond MAX_JOINT_STEP (no fold partner near) or kappa vanishes."""
+    frames = np.empty((7, 12))
+    J = np.empty((6, 6))
+    fk_frames(chain, q, frames)
+    _jacobian(chain, frames, J)
+    for r in range(3):
+        for c in range(6):
+            J[r, c] /= lever
+    U, S, Vt = np.linalg.svd(J)
+    sigma = S[5]
+    curvature = 0.0
+    for sign in (1.0, -1.0):
+        for j in range(6):
+            out[j] = q[j] + sign * PROBE_STEP * Vt[5, j]
+        fk_frames(chain, out, frames)
+        _jacobian(chain, frames, J)
+        for r in range(6):
+            row = 0.0
+            for c in range(6):
+                row += J[r, c] * Vt[5, c]
+            if r < 3:
+                row /= lever
+            curvature += sign * U[r, 5] * row / (2.0 * PROBE_STEP)
+    if not abs(curvature) > 0.0:
+        return False
+    t = -2.0 * sigma / curvature
+    if not abs(t) <= MAX_JOINT_STEP:
+        return False
+    for j in range(6):
+        out[j] = q[j] + t * Vt[5, j]
+    fixed = np.zeros(6, np.bool_)
+    refine(chain, target, out, fixed, goal, BUDGET, GROWTH, 0.0)
+    return True
 
 
 @jit
@@ -290,3 +393,63 @@ def _walk(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np
         distance = trial_distance
         error[0], error[1] = position, rotation
         length = min(2.0 * length, MAX_JOINT_STEP)
+
+
+#: Interior points (at k / 8 of the way) of a segment from a singular root to the seed's
+#: Newton point that must lie on the solutions for the two to be one set of solutions
+#: (:func:`on_segment`): a straight segment of solutions (a free pair of coincident axes,
+#: q_i +- q_j fixed) passes at all, a chord across a curved set or between two distinct
+#: roots fails near its middle.
+SEGMENT_POINTS = 7
+
+
+@jit
+def seed_projection(chain: NDArray[np.float64], T: NDArray[np.float64],
+                    seed: NDArray[np.float64], tolerance: float, lever: float, band: float,
+                    out: NDArray[np.float64], error: NDArray[np.float64]) -> bool:
+    """Damped Newton from ``seed`` onto the solutions (the families' seeded refinement), into
+    out; whether it verifies at ``tolerance`` and is singular (sigma within ``band``): a
+    candidate for the seed's member of a curve, which :func:`on_segment` must tie to a root
+    the elimination found (it is never a root of its own)."""
+    target = np.ascontiguousarray(T[:3])
+    fixed = np.zeros(6, np.bool_)
+    state = np.empty(12)
+    for j in range(6):
+        out[j] = seed[j]
+    refine(chain, target, out, fixed, refine_tolerance(tolerance, lever), 4 * MAX_STEPS,
+           GROWTH, SEED_DAMPING)
+    position, rotation = check(chain, out, target, state)
+    error[0], error[1] = position, rotation
+    if not (position <= tolerance and rotation <= tolerance):
+        return False
+    return smallest_singular(chain, out, lever, band) <= band
+
+
+@jit
+def on_segment(chain: NDArray[np.float64], T: NDArray[np.float64], a: NDArray[np.float64],
+               b: NDArray[np.float64], tolerance: float, lever: float, band: float) -> bool:
+    """Whether the segment from a to b (joint differences wrapped) lies on the solutions: each
+    of its :data:`SEGMENT_POINTS` interior points, refined by monotone Newton steps, verifies
+    at ``tolerance`` within ``band`` (rad) of where it was. Within the band, not at the point
+    itself: the elimination's singular root lies in the cloud of near-solutions around the
+    set (~1e-7 rad off a line of solutions on the CRX-10iA), and a chord from it drifts off
+    the line by as much times the angle travelled."""
+    target = np.ascontiguousarray(T[:3])
+    fixed = np.zeros(6, np.bool_)
+    state = np.empty(12)
+    point = np.empty(6)
+    start = np.empty(6)
+    goal = refine_tolerance(tolerance, lever)
+    for k in range(1, SEGMENT_POINTS + 1):
+        t = k / (SEGMENT_POINTS + 1.0)
+        for j in range(6):
+            start[j] = a[j] + t * _wrap(b[j] - a[j])
+            point[j] = start[j]
+        refine(chain, target, point, fixed, goal, 4 * MAX_STEPS, 1.0, 0.0)
+        position, rotation = check(chain, point, target, state)
+        if not (position <= tolerance and rotation <= tolerance):
+            return False
+        for j in range(6):
+            if abs(point[j] - start[j]) > band:
+                return False
+    return True

@@ -56,8 +56,10 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
         walk(chain, target, q, seed, tolerance, lever, band, errors[index])
         if (reached and distance_projected < float(np.sum(wrap(q - seed) ** 2))
                 and on_segment(chain, target, q, projected, tolerance, lever, band)):
-            q = wrap(projected)
+            q = np.ascontiguousarray(wrap(projected))
             errors[index] = projected_error
+            # damped Newton stops near, not at, the member nearest the seed: walk the rest
+            walk(chain, target, q, seed, tolerance, lever, band, errors[index])
         roots[index] = q
     keep = np.ones(roots.shape[0], np.bool_)
     state = np.empty(12)

@@ -310,7 +310,8 @@ def walk(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float
     and kept while it verifies at ``tolerance``, comes nearer the seed and stays on the same
     root (the midpoint of the step verifies too: the merging rule; near a fold Newton could
     land on a distinct root nearer the seed); a failed step is retried a quarter as long,
-    down to ``band`` (:data:`WALK_STEPS` trials). Where the pose is only near-singular Newton
+    down to ``band`` (:data:`WALK_STEPS` trials), and the walk ends where the seed's offset
+    along the weak directions is within ``tolerance`` (rad). Where the pose is only near-singular Newton
     returns to the root, or lands on another one, and q does not move. error: the residuals
     (position, rotation) of the final q, where it moved."""
     target = np.ascontiguousarray(T[:3])
@@ -370,8 +371,8 @@ def _walk(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np
         longest = 0.0
         for j in range(6):
             longest = max(longest, abs(step[j]))
-        if longest <= band:
-            return
+        if longest <= tolerance:
+            return  # nearer than the tolerance (rad): no step it could verify
         scale = length / longest if longest > length else 1.0
         for j in range(6):
             trial[j] = q[j] + scale * step[j]

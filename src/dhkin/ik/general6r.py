@@ -23,7 +23,6 @@ TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
 from __future__ import annotations
 
 import functools
-import math
 import threading
 from collections.abc import Callable
 from types import MappingProxyType
@@ -37,6 +36,7 @@ from dhkin.errors import FamilyError, InputError
 from dhkin.ik.general6r_answer import copies as copies_within
 from dhkin.ik.general6r_answer import (
     onto_limits,
+    pack,
     seed_members,
     singular_band,
 )
@@ -48,8 +48,9 @@ from dhkin.ik.general6r_arrangement import (
 )
 from dhkin.ik.general6r_elimination import Elimination
 from dhkin.ik.general6r_model import Model, _inverse, refit
+from dhkin.ik.general6r_moves import fallback_starts, moves, perturbations
 from dhkin.ik.inputs import TWO_PI, as_targets, check_tolerance, pose_error_message
-from dhkin.ik.result import FLAG_NAMES, Configuration, IKBatch, IKSolutions
+from dhkin.ik.result import Configuration, IKBatch, IKSolutions
 from dhkin.tolerances import DEFAULT_TOLERANCE
 
 #: The free angles eliminated first: theta_k = shift + 2 atan(x3). An angle with no special
@@ -93,8 +94,11 @@ class General6RSolver:
         self.arrangement = arrangement
         self.model, self.elimination = self._eliminator(arrangement)
         self._data = self.kernel_data()
-        #: The moved poses of an ill-conditioned pose (:func:`perturbations`).
+        #: The moved poses of an ill-conditioned pose (:mod:`dhkin.ik.general6r_moves`): the
+        #: motions (2, 6) and their matrices (2, 4, 4).
+        self.moves = moves(self.model.scale)
         self.perturbations = perturbations(self.model.scale)
+        self.fallback = fallback_starts(table.lower, table.upper)
         from dhkin.ik.compiled.general6r_qz import DGGEV
 
         self._dggev = DGGEV
@@ -234,14 +238,14 @@ class General6RSolver:
         starts = np.empty((MAX_CANDIDATES, 6))
         origin = np.empty(MAX_CANDIDATES, np.int64)
         info = np.empty(2)
-        count = all_candidates(*self._data, self.perturbations, DGGEV,
+        count = all_candidates(*self._data, self.perturbations, self.fallback, DGGEV,
                                np.ascontiguousarray(T_dh), starts, origin, info)
         roots = np.empty((count, 6))
         errors = np.empty((count, 2))
         sigmas = np.empty(count)
         band = singular_band(tolerance)
         found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, origin, count,
-                               tolerance, lever, band, roots, errors, sigmas)
+                               self.moves, tolerance, lever, band, roots, errors, sigmas)
         return roots[:found], errors[:found], failed, sigmas[:found] <= band
 
     def reach(self, tolerance: float, tool: NDArray[np.float64]) -> float:
@@ -296,15 +300,22 @@ class General6RSolver:
             buffers = self._buffers.arrays
         except AttributeError:
             buffers = self._fast_buffers()
-        count = self._fast_kernel(*self._data, self.perturbations, self._dggev,
-                                  self._base_inverse,
-                                  self._tool_inverse, self.tip_chain, target, seed, *constants,
-                                  *buffers)
-        if count < 0:
-            return None
-        from dhkin.ik.compiled.general6r import FAILED, PROJECTION
+        count = self._fast_kernel(*self._data, self.perturbations, self.moves, self.fallback,
+                                  self._dggev, self._base_inverse, self._tool_inverse,
+                                  self.tip_chain, target, seed, *constants, *buffers)
+        from dhkin.ik.compiled.general6r import FAILED, FOUND, PROJECTION, SETTLED
 
         out_q, out_errors, info = buffers[5], buffers[6], buffers[8]
+        if count == SETTLED:  # the roots are in the buffers: the Python path finishes
+            found = int(info[FOUND])
+            band = constants[3]
+            projected, projection = self._pose(target, "T")
+            return self._answer(projected, projection, None if q_seed is None else seed,
+                                tolerance, self._tip(None), False, buffers[2][:found].copy(),
+                                buffers[3][:found].copy(), int(info[FAILED]),
+                                buffers[4][:found] <= band)
+        if count < 0:
+            return None
         q = out_q[:count].copy()
         turns = np.rint(q * (1.0 / TWO_PI)).astype(np.int64).tolist()
         return IKSolutions(q=q, configurations=tuple(map(self._configuration,
@@ -321,7 +332,7 @@ class General6RSolver:
         n = MAX_CANDIDATES
         arrays = (np.empty((n, 6)), np.empty(n, np.int64), np.empty((n, 6)), np.empty((n, 2)),
                   np.empty(n), np.empty((n, 6)), np.empty((n, 2)), np.empty(n, np.int64),
-                  np.empty(2))
+                  np.empty(3))
         self._buffers.arrays = arrays
         return arrays
 
@@ -334,7 +345,9 @@ class General6RSolver:
         from dhkin.ik.compiled.general6r_qz import DGGEV
         from dhkin.ik.solver import _compiled
 
-        args = (*self._data, self.perturbations, DGGEV, self._base_inverse, self._tool_inverse,
+        args = (*self._data, self.perturbations, self.moves, self.fallback, DGGEV,
+                self._base_inverse,
+                self._tool_inverse,
                 self.tip_chain, np.eye(4), self._zero_seed, 1.0, DEFAULT_TOLERANCE, 1.0, 1.0,
                 self.table.lower, self.table.upper, 1.0, *self._fast_buffers())
         kernel: Callable[..., int] = _compiled(solve_pose, args, None)
@@ -361,9 +374,22 @@ class General6RSolver:
                                       f"DH frame 0, farther than the chain's links reach "
                                       f"({self.links:.6g} m)")
         verify = self.verification_tolerance(tolerance, lever)
+        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, verify, lever)
+        return self._answer(target, projection, seed, tolerance, tip, copies, roots, errors,
+                            failed, singular)
+
+    def _answer(self, target: NDArray[np.float64], projection: float,
+                seed: NDArray[np.float64] | None, tolerance: float,
+                tip: tuple[NDArray[np.float64], NDArray[np.float64], float], copies: bool,
+                roots: NDArray[np.float64], errors: NDArray[np.float64], failed: int,
+                singular: NDArray[np.bool_]) -> IKSolutions:
+        """:meth:`solve_one` of a checked, projected pose from its settled roots: the seed's
+        member of each singular root, the 2pi copies, the result."""
+        chain, _, lever = tip
+        tip_target = self._base_inverse @ target
+        verify = self.verification_tolerance(tolerance, lever)
         if seed is None:  # as in the families: without a seed, free joints are chosen near 0
             seed = np.zeros(6)
-        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, verify, lever)
         if np.any(singular):
             keep = seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
             roots, errors, singular = roots[keep], errors[keep], singular[keep]
@@ -448,26 +474,7 @@ class General6RSolver:
                 target, projection = self._pose(targets[index], f"T[{index}]")
                 result = self._solve(target, projection, seeds[index], tolerance, tip, copies)
             results.append(result)
-        width = max([len(r) for r in results], default=0)
-        q = np.zeros((n_poses, width, 6))
-        valid = np.zeros((n_poses, width), np.bool_)
-        flags = np.zeros((n_poses, width), np.uint8)
-        branch = np.full((n_poses, width), -1, np.int16)
-        residuals = np.zeros((n_poses, width, 2))
-        bits = {name: bit for bit, name in FLAG_NAMES.items()}
-        for index, result in enumerate(results):
-            count = len(result)
-            q[index, :count] = result.q
-            valid[index, :count] = True
-            branch[index, :count] = 0
-            residuals[index, :count] = result.residuals
-            for slot, names in enumerate(result.flags):
-                flags[index, slot] = sum(bits[name] for name in names)
-        return IKBatch(q=q, valid=valid, flags=flags, branch=branch,
-                       branch_labels=self.branch_labels, family=self.family,
-                       residuals=residuals,
-                       projection=np.array([r.projection for r in results]),
-                       dropped=np.array([r.dropped for r in results], np.int64))
+        return pack(results, self.branch_labels, self.family)
 
     def _configuration(self, turns: tuple[int, ...]) -> Configuration:
         found = self._configurations.get(turns)
@@ -475,40 +482,6 @@ class General6RSolver:
             found = Configuration(labels=self.branch_labels[0], turns=turns)
             self._configurations[turns] = found
         return found
-
-#: Size of the moved poses of an ill-conditioned pose (:func:`perturbations`; rad, and units
-#: of the model's length scale). Where M(x) is singular for every x at a pose (special poses
-#: of the tilted UR5 in every arrangement, of the CRX-10iA in its own), a pose moved by e has
-#: a regular, but e-close to singular, matrix polynomial: its eigenvalues keep the regular
-#: part's (the roots), the null vectors lose eps / e of accuracy, and each regular root of
-#: sigma moves by ~e / sigma (near a fold, a double root splits or turns into a complex pair
-#: ~sqrt(e) off the real axis, within the imaginary band): all Newton starts. Measured on
-#: the ill-conditioned special-angle poses of the CRX-10iA and the tilted UR5 (182 of 800),
-#: every root was found for e from 1e-6 to 1e-3 (a root lost at 1e-7 and at 1e-2); 1e-4 lies
-#: in the middle of that range.
-PERTURBATION = 1e-4
-
-
-#: The direction of the moved poses: a fixed twist (rotation, translation) with no special
-#: component.
-PERTURBATION_TWIST = np.array([0.3, -0.5, 0.7, 0.2, 0.4, -0.1]) / math.sqrt(1.04)
-
-
-def perturbations(scale: float) -> NDArray[np.float64]:
-    """The two rigid motions (2, 4, 4) exp(+-PERTURBATION twist) of DH frame 0 by which an
-    ill-conditioned pose is moved (:func:`dhkin.ik.compiled.general6r.all_candidates`),
-    translations in units of ``scale`` metres."""
-    out = np.tile(np.eye(4), (2, 1, 1))
-    for index, sign in enumerate((1.0, -1.0)):
-        rotation = sign * PERTURBATION * PERTURBATION_TWIST[:3]
-        angle = float(np.linalg.norm(rotation))
-        axis = rotation / angle
-        K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
-                      [-axis[1], axis[0], 0.0]])
-        out[index, :3, :3] = np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
-        out[index, :3, 3] = sign * PERTURBATION * scale * PERTURBATION_TWIST[3:]
-    return out
-
 
 _REGULAR: frozenset[str] = frozenset()
 _SINGULAR: frozenset[str] = frozenset({"singular"})

@@ -8,12 +8,14 @@ Joint values are URDF joint values (rad); ``chain`` is the exact chain to the po
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.ik.general6r_arrangement import wrap
 from dhkin.ik.inputs import TWO_PI
+from dhkin.ik.result import FLAG_NAMES, IKBatch, IKSolutions
 
 
 def singular_band(tolerance: float) -> float:
@@ -33,16 +35,16 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
                  tolerance: float, lever: float) -> NDArray[np.bool_]:
     """The seed's choice where a joint is free, in place, as the families' seeded candidate
     (the member of the solution family nearest the seed, docs/ik_core.md): each singular root
-    moves along the solutions towards the seed (:func:`dhkin.ik.compiled.general6r_roots.walk`),
+    moves along the solutions towards the seed (:func:`dhkin.ik.compiled.general6r_members.walk`),
     and is replaced by the point damped Newton reaches from the seed where that point is
     singular, nearer the seed, and tied to the root by a segment of solutions
-    (:func:`~dhkin.ik.compiled.general6r_roots.on_segment`: a free pair of coincident axes,
+    (:func:`~dhkin.ik.compiled.general6r_members.on_segment`: a free pair of coincident axes,
     where the weak directions of a cloud of near-solutions make walking stall). The seed is
     never a root of its own: the roots stay those the elimination found. Returns which roots
     to keep: a root that moved onto an earlier one (their midpoint verifies, the merging
     rule) is one root with it."""
     from dhkin.ik.compiled.chain import MAX_JOINT_STEP, check
-    from dhkin.ik.compiled.general6r_roots import on_segment, seed_projection, walk
+    from dhkin.ik.compiled.general6r_members import on_segment, seed_projection, walk
 
     band = singular_band(tolerance)
     target = np.ascontiguousarray(tip_target[:3])
@@ -127,3 +129,31 @@ def onto_limits(lower: NDArray[np.float64], upper: NDArray[np.float64],
         residuals[row] = position, rotation
     return (clipped[keep], residuals[keep],
             [f for f, k in zip(flags, keep, strict=True) if k])
+
+
+def pack(results: list[IKSolutions], branch_labels: tuple[Mapping[str, str], ...],
+         family: str) -> IKBatch:
+    """Single answers (one per pose) as a batch padded to the largest count; ``branch`` is 0
+    for every solution (the general solver's one label set)."""
+    n_poses = len(results)
+    width = max([len(r) for r in results], default=0)
+    q = np.zeros((n_poses, width, 6))
+    valid = np.zeros((n_poses, width), np.bool_)
+    flags = np.zeros((n_poses, width), np.uint8)
+    branch = np.full((n_poses, width), -1, np.int16)
+    residuals = np.zeros((n_poses, width, 2))
+    bits = {name: bit for bit, name in FLAG_NAMES.items()}
+    for index, result in enumerate(results):
+        count = len(result)
+        q[index, :count] = result.q
+        valid[index, :count] = True
+        branch[index, :count] = 0
+        residuals[index, :count] = result.residuals
+        for slot, names in enumerate(result.flags):
+            flags[index, slot] = sum(bits[name] for name in names)
+    return IKBatch(q=q, valid=valid, flags=flags, branch=branch,
+                   branch_labels=branch_labels, family=family,
+                   residuals=residuals,
+                   projection=np.array([r.projection for r in results]),
+                   dropped=np.array([r.dropped for r in results], np.int64))
+

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from dhkin.ik.compiled.general6r_back import back_substitute, rigid_inverse
 from dhkin.ik.compiled.general6r_null import MAX_SPLIT, null_space, null_vector, split
 from dhkin.ik.compiled.general6r_qz import pencil_eigenvalues
-from dhkin.ik.compiled.general6r_roots import PAIRED, SHARED, nearest_copies, settle
+from dhkin.ik.compiled.general6r_roots import MOVED, PAIRED, SHARED, nearest_copies, settle
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.pose import project, status
 
@@ -58,9 +58,9 @@ CLUSTER = 1e-3
 MAX_PER_POSE = 24 * MAX_SPLIT
 
 
-#: Most candidates one pose can give: its own and the two moved poses' of
-#: :func:`all_candidates`.
-MAX_CANDIDATES = 3 * MAX_PER_POSE
+#: Most candidates one pose can give: its own, the two moved poses' and the fallback starts
+#: of :func:`all_candidates` (at most FALLBACK_STARTS, :mod:`dhkin.ik.general6r_moves`).
+MAX_CANDIDATES = 3 * MAX_PER_POSE + 32
 
 
 @jit
@@ -273,7 +273,8 @@ def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
                    D0_inverse: NDArray[np.float64], E_inverse: NDArray[np.float64],
                    setup: NDArray[np.float64], direction: NDArray[np.float64],
                    offset: NDArray[np.float64], perturbations: NDArray[np.float64],
-                   dggev: object, T_dh: NDArray[np.float64], out: NDArray[np.float64],
+                   fallback: NDArray[np.float64], dggev: object, T_dh: NDArray[np.float64],
+                   out: NDArray[np.float64],
                    origin: NDArray[np.int64], info: NDArray[np.float64]) -> int:
     """:func:`candidates` of T_dh; where its eigenproblem is ill-conditioned (info[0] below
     LEAD_CONDITION: the matrix polynomial is singular, or nearly, at this pose) instead, and
@@ -284,7 +285,12 @@ def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
     moved pose is among its eigenvalues, and
     every regular root of T_dh lies near one of them, within Newton's reach
     (docs/general6r.md, "Every root"). info[0]: the leading matrix's reciprocal condition at
-    T_dh; info[1]: 1 where the moved poses were used, else 0."""
+    T_dh; info[1]: 1 where the moved poses were used, else 0. The starts of moved pose p have
+    origin bit MOVED << p (their root is followed back to T_dh where Newton does not reach it
+    at once, :func:`dhkin.ik.compiled.general6r_track.track`). With the moved poses, the
+    ``fallback`` starts (fixed joint vectors, :data:`dhkin.ik.general6r_moves.FALLBACK_STARTS`)
+    are starts too: near a highly degenerate singular set (a stretched arm with a free wrist)
+    a moved pose's own eigenproblem can lose the roots it has there."""
     count = candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
                        E_inverse, setup, direction, offset, dggev, False, T_dh, out, origin,
                        info)
@@ -296,9 +302,19 @@ def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
     inner = np.empty(2)
     for p in range(perturbations.shape[0]):
         moved = np.ascontiguousarray(perturbations[p]) @ T_dh
+        first = count
         count += candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
                             E_inverse, setup, direction, offset, dggev, True, moved,
                             out[count:], origin[count:], inner)
+        for index in range(first, count):
+            origin[index] |= MOVED << p
+    for index in range(fallback.shape[0]):
+        if count >= out.shape[0]:
+            break
+        for j in range(6):
+            out[count, j] = fallback[index, j]
+        origin[count] = 0
+        count += 1
     return count
 
 
@@ -312,8 +328,15 @@ def _safe_inverse(M: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 #: Layout of :func:`solve_pose`'s ``info``: the pose's projection, candidates that did not
-#: verify.
-PROJECTION, FAILED = 0, 1
+#: verify, roots found (where it returns SETTLED).
+PROJECTION, FAILED, FOUND = 0, 1, 2
+
+
+#: :func:`solve_pose`'s answers other than a row count: the Python path answers (an input to
+#: reject, a pose out of reach); the roots are settled in the buffers but the Python path
+#: finishes (a singular root: the seed's member; no root, or no copy within the limits: the
+#: reason).
+REJECT, SETTLED = -1, -2
 
 
 @jit
@@ -323,7 +346,8 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
                phi: NDArray[np.float64], D0_inverse: NDArray[np.float64],
                E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
                direction: NDArray[np.float64], offset: NDArray[np.float64],
-               perturbations: NDArray[np.float64], dggev: object,
+               perturbations: NDArray[np.float64], moves: NDArray[np.float64],
+               fallback: NDArray[np.float64], dggev: object,
                base_inverse: NDArray[np.float64],
                tool_inverse: NDArray[np.float64], chain: NDArray[np.float64],
                T: NDArray[np.float64], seed: NDArray[np.float64], reach: float,
@@ -339,36 +363,37 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
     DH frame 6 within ``reach`` of DH frame 0, its candidates (:func:`all_candidates`),
     refined, verified at ``tolerance`` (the verification tolerance) and merged
     (:func:`settle`), each root's in-limit copy nearest ``seed`` (:func:`nearest_copies`,
-    ``slack``). Returns the number of rows written to out_q, out_errors (all regular), or -1
-    where the Python path must answer: a pose or seed not usable (it raises the error), out of
-    reach or no solution (the reason), a singular root (the seed's member of a curve of
-    solutions)."""
+    ``slack``). Returns the number of rows written to out_q, out_errors (all regular), or
+    REJECT where the Python path must answer (a pose or seed not usable: it raises the error;
+    out of reach: the reason), or SETTLED where the roots, their residuals and sigmas are in
+    roots, errors, sigmas (info[FOUND] of them) and the Python path finishes (a singular root:
+    the seed's member of a curve of solutions; no root or no in-limit copy: the reason)."""
     for j in range(6):
         if not abs(seed[j]) < math.inf:
-            return -1
+            return REJECT
     if status(T) != 0:
-        return -1
+        return REJECT
     target = np.eye(4)
     info[PROJECTION] = project(T, target[:3])
     tip_target = base_inverse @ target
     T_dh = tip_target @ tool_inverse
     if not within_reach(T_dh, reach):
-        return -1
+        return REJECT
     eigen = np.empty(2)
     count = all_candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
-                           E_inverse, setup, direction, offset, perturbations, dggev, T_dh,
-                           starts, origin, eigen)
-    found, failed = settle(chain, tip_target, starts, origin, count, tolerance, lever, band,
-                           roots, errors, sigmas)
-    info[FAILED] = failed
+                           E_inverse, setup, direction, offset, perturbations, fallback, dggev,
+                           T_dh, starts, origin, eigen)
+    found, failed = settle(chain, tip_target, starts, origin, count, moves, tolerance, lever,
+                           band, roots, errors, sigmas)
+    info[FAILED], info[FOUND] = failed, found
     if found == 0:
-        return -1
+        return SETTLED
     for k in range(found):
         if sigmas[k] <= band:
-            return -1
+            return SETTLED
     count = nearest_copies(chain, tip_target, roots, errors, found, seed, lower, upper, slack,
                            tolerance, lever, out_q, out_errors, kept)
-    return count if count > 0 else -1
+    return count if count > 0 else SETTLED
 
 
 @jit

@@ -13,6 +13,7 @@ so that the kernels can be cached on disk).
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Callable
 
 import numpy as np
 from numba.extending import get_cython_function_address
@@ -29,7 +30,7 @@ DGGEV = ctypes.CFUNCTYPE(None, *([_POINTER] * 17))(
 
 
 @jit
-def pencil_eigenvalues(dggev: object, L: NDArray[np.float64], R: NDArray[np.float64],
+def pencil_eigenvalues(dggev: Callable[..., None], L: NDArray[np.float64], R: NDArray[np.float64],
                        real: NDArray[np.float64], imaginary: NDArray[np.float64]) -> bool:
     """The eigenvalues of the pencil L - x R (n x n, row-major; overwritten) into real,
     imaginary (n,): alpha / beta, an infinite one (beta = 0) as inf. False if LAPACK fails."""

@@ -16,14 +16,13 @@ from numpy.typing import NDArray
 
 from dhkin.ik.compiled.chain import (
     MAX_JOINT_STEP,
-    MAX_STEPS,
     REFINE_FRACTION,
-    SEED_DAMPING,
     _jacobian,
     check,
     fk_frames,
     refine,
 )
+from dhkin.ik.compiled.general6r_track import track
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.plan import FK_ROUNDING
 
@@ -72,16 +71,17 @@ def smallest_singular(chain: NDArray[np.float64], q: NDArray[np.float64], lever:
 
 @jit
 def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArray[np.float64],
-           origin: NDArray[np.int64], n_starts: int, tolerance: float, lever: float,
-           band: float, roots: NDArray[np.float64], errors: NDArray[np.float64],
-           sigmas: NDArray[np.float64]) -> tuple[int, int]:
+           origin: NDArray[np.int64], n_starts: int, moves: NDArray[np.float64],
+           tolerance: float, lever: float, band: float, roots: NDArray[np.float64],
+           errors: NDArray[np.float64], sigmas: NDArray[np.float64]) -> tuple[int, int]:
     """Refine every start on the exact chain, keep those that verify at ``tolerance``, merge
     those that are one root (close, and their midpoint verifies). Only the elimination's
     candidates are starts: the seed never is (it chooses among the roots, it does not find
     them). Starts whose ``origin`` has PAIRED (near-real complex pairs of eigenvalues) get
     PAIR_BUDGET; the roots reached from SHARED ones (a cluster of eigenvalues) have their
     fold partner probed where their singular value is at most PROBE_SIGMA
-    (:func:`fold_partner`).
+    (:func:`fold_partner`); those of a moved pose (MOVED, ``moves`` the motions) that Newton
+    does not bring back at once are followed back (:func:`~.general6r_track.track`).
     Newton runs until the residual is REFINE_FRACTION of the tolerance on the oracle's FK too
     (:func:`refine_tolerance`). Returns (roots found, candidates that did not verify); sigmas:
     :func:`smallest_singular` of each root (``lever``, ``band``)."""
@@ -96,9 +96,18 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
     for index in range(n_starts):
         for j in range(6):
             q[j] = starts[index, j]
-        budget = PAIR_BUDGET if origin[index] & PAIRED else BUDGET
+        # a start of a moved pose lies within ~e / sigma of a regular root: Newton reaches it
+        # in a few steps, or the root is followed back below (as a complex pair's start)
+        budget = PAIR_BUDGET if origin[index] & (PAIRED | MOVED | MOVED << 1) else BUDGET
         refine(chain, target, q, fixed, goal, budget, GROWTH, 0.0)
         position, rotation = check(chain, q, target, state)
+        moved = origin[index] // MOVED
+        if not (position <= tolerance and rotation <= tolerance) and moved:
+            # a start of a moved pose that Newton did not bring back: follow its root back
+            for j in range(6):
+                q[j] = starts[index, j]
+            if track(chain, target, q, moves[0 if moved & 1 else 1], goal, tolerance):
+                position, rotation = check(chain, q, target, state)
         if not (position <= tolerance and rotation <= tolerance):
             failed += 1
             continue
@@ -164,8 +173,9 @@ def _known(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[n
 
 
 #: Bits of a start's origin (:func:`dhkin.ik.compiled.general6r.candidates`): a near-real
-#: complex pair of eigenvalues, a cluster of eigenvalues.
-PAIRED, SHARED = 1, 2
+#: complex pair of eigenvalues, a cluster of eigenvalues, the first moved pose (MOVED << 1:
+#: the second; :func:`dhkin.ik.compiled.general6r.all_candidates`).
+PAIRED, SHARED, MOVED = 1, 2, 4
 
 
 #: Roots whose smallest singular value (scaled Jacobian) is at most this get their fold
@@ -288,169 +298,3 @@ def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
         kept[count] = k
         count += 1
     return count
-
-
-#: Trial steps of :func:`walk` (a failed step is retried a quarter as long): on a curved
-#: solution set the midpoint of a chord of length L lies ~kappa L^2 / 8 off it, so long steps
-#: fail where short ones pass (a CRX-10iA pose at q5 = 0 whose members 1.6 rad apart needed
-#: steps of ~0.05 rad); 100 trials walk ~3 rad at that length, beyond any seed within the
-#: continuity distance of a member.
-WALK_STEPS = 100
-
-
-@jit
-def walk(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
-         seed: NDArray[np.float64], tolerance: float, lever: float, band: float,
-         error: NDArray[np.float64]) -> None:
-    """A singular root q (in place) moved along the solutions towards ``seed``: the member of a
-    curve of solutions nearest the seed where a joint is free (docs/general6r.md). Each step
-    goes along the Jacobian's weak directions (singular values of the Jacobian, linear rows
-    over ``lever``, within ``band``) by the seed's offset projected onto them, at most
-    MAX_JOINT_STEP per joint, is refined by Newton on the exact chain (target T, 3 or 4 rows)
-    and kept while it verifies at ``tolerance``, comes nearer the seed and stays on the same
-    root (the midpoint of the step verifies too: the merging rule; near a fold Newton could
-    land on a distinct root nearer the seed); a failed step is retried a quarter as long,
-    down to ``band`` (:data:`WALK_STEPS` trials), and the walk ends where the seed's offset
-    along the weak directions is within ``tolerance`` (rad). Where the pose is only near-singular Newton
-    returns to the root, or lands on another one, and q does not move. error: the residuals
-    (position, rotation) of the final q, where it moved."""
-    target = np.ascontiguousarray(T[:3])
-    fixed = np.zeros(6, np.bool_)
-    state = np.empty(12)
-    frames = np.empty((7, 12))
-    J = np.empty((6, 6))
-    step = np.empty(6)
-    offset = np.empty(6)
-    trial = np.empty(6)
-    middle = np.empty(6)
-    distance = 0.0
-    for j in range(6):
-        distance += _wrap(q[j] - seed[j]) ** 2
-    length = MAX_JOINT_STEP
-    _walk(chain, target, q, seed, tolerance, lever, band, error, distance, length, fixed,
-          state, frames, J, step, offset, trial, middle)
-    # polish: monotone Newton steps from the member reached (Newton converges slowly at a
-    # singular root; these bring its residual to REFINE_FRACTION of the tolerance)
-    for j in range(6):
-        trial[j] = q[j]
-    refine(chain, target, trial, fixed, refine_tolerance(tolerance, lever), 4 * MAX_STEPS,
-           1.0, 0.0)
-    position, rotation = check(chain, trial, target, state)
-    if position <= tolerance and rotation <= tolerance and max(position, rotation) < max(
-            error[0], error[1]):
-        for j in range(6):
-            q[j] = _wrap(trial[j])
-        error[0], error[1] = position, rotation
-
-
-@jit
-def _walk(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np.float64],
-          seed: NDArray[np.float64], tolerance: float, lever: float, band: float,
-          error: NDArray[np.float64], distance: float, length: float,
-          fixed: NDArray[np.bool_], state: NDArray[np.float64], frames: NDArray[np.float64],
-          J: NDArray[np.float64], step: NDArray[np.float64], offset: NDArray[np.float64],
-          trial: NDArray[np.float64], middle: NDArray[np.float64]) -> None:
-    """:func:`walk`'s steps (its work arrays passed in)."""
-    for _ in range(WALK_STEPS):
-        fk_frames(chain, q, frames)
-        _jacobian(chain, frames, J)
-        for r in range(3):
-            for c in range(6):
-                J[r, c] /= lever
-        _, sigma, Vt = np.linalg.svd(J)
-        for j in range(6):
-            offset[j] = _wrap(seed[j] - q[j])
-            step[j] = 0.0
-        for w in range(6):
-            if sigma[w] <= band:
-                along = 0.0
-                for j in range(6):
-                    along += Vt[w, j] * offset[j]
-                for j in range(6):
-                    step[j] += along * Vt[w, j]
-        longest = 0.0
-        for j in range(6):
-            longest = max(longest, abs(step[j]))
-        if longest <= tolerance:
-            return  # nearer than the tolerance (rad): no step it could verify
-        scale = length / longest if longest > length else 1.0
-        for j in range(6):
-            trial[j] = q[j] + scale * step[j]
-        refine(chain, target, trial, fixed, tolerance, 4 * MAX_STEPS, GROWTH, 0.0)
-        position, rotation = check(chain, trial, target, state)
-        trial_distance = 0.0
-        for j in range(6):
-            trial_distance += _wrap(trial[j] - seed[j]) ** 2
-            middle[j] = q[j] + 0.5 * _wrap(trial[j] - q[j])
-        between_position, between_rotation = check(chain, middle, target, state)
-        if not (position <= tolerance and rotation <= tolerance and trial_distance < distance
-                and between_position <= tolerance and between_rotation <= tolerance):
-            length = 0.25 * min(length, longest)
-            if length <= band:
-                return
-            continue
-        for j in range(6):
-            q[j] = _wrap(trial[j])
-        distance = trial_distance
-        error[0], error[1] = position, rotation
-        length = min(2.0 * length, MAX_JOINT_STEP)
-
-
-#: Interior points (at k / 8 of the way) of a segment from a singular root to the seed's
-#: Newton point that must lie on the solutions for the two to be one set of solutions
-#: (:func:`on_segment`): a straight segment of solutions (a free pair of coincident axes,
-#: q_i +- q_j fixed) passes at all, a chord across a curved set or between two distinct
-#: roots fails near its middle.
-SEGMENT_POINTS = 7
-
-
-@jit
-def seed_projection(chain: NDArray[np.float64], T: NDArray[np.float64],
-                    seed: NDArray[np.float64], tolerance: float, lever: float, band: float,
-                    out: NDArray[np.float64], error: NDArray[np.float64]) -> bool:
-    """Damped Newton from ``seed`` onto the solutions (the families' seeded refinement), into
-    out; whether it verifies at ``tolerance`` and is singular (sigma within ``band``): a
-    candidate for the seed's member of a curve, which :func:`on_segment` must tie to a root
-    the elimination found (it is never a root of its own)."""
-    target = np.ascontiguousarray(T[:3])
-    fixed = np.zeros(6, np.bool_)
-    state = np.empty(12)
-    for j in range(6):
-        out[j] = seed[j]
-    refine(chain, target, out, fixed, refine_tolerance(tolerance, lever), 4 * MAX_STEPS,
-           GROWTH, SEED_DAMPING)
-    position, rotation = check(chain, out, target, state)
-    error[0], error[1] = position, rotation
-    if not (position <= tolerance and rotation <= tolerance):
-        return False
-    return smallest_singular(chain, out, lever, band) <= band
-
-
-@jit
-def on_segment(chain: NDArray[np.float64], T: NDArray[np.float64], a: NDArray[np.float64],
-               b: NDArray[np.float64], tolerance: float, lever: float, band: float) -> bool:
-    """Whether the segment from a to b (joint differences wrapped) lies on the solutions: each
-    of its :data:`SEGMENT_POINTS` interior points, refined by monotone Newton steps, verifies
-    at ``tolerance`` within ``band`` (rad) of where it was. Within the band, not at the point
-    itself: the elimination's singular root lies in the cloud of near-solutions around the
-    set (~1e-7 rad off a line of solutions on the CRX-10iA), and a chord from it drifts off
-    the line by as much times the angle travelled."""
-    target = np.ascontiguousarray(T[:3])
-    fixed = np.zeros(6, np.bool_)
-    state = np.empty(12)
-    point = np.empty(6)
-    start = np.empty(6)
-    goal = refine_tolerance(tolerance, lever)
-    for k in range(1, SEGMENT_POINTS + 1):
-        t = k / (SEGMENT_POINTS + 1.0)
-        for j in range(6):
-            start[j] = a[j] + t * _wrap(b[j] - a[j])
-            point[j] = start[j]
-        refine(chain, target, point, fixed, goal, 4 * MAX_STEPS, 1.0, 0.0)
-        position, rotation = check(chain, point, target, state)
-        if not (position <= tolerance and rotation <= tolerance):
-            return False
-        for j in range(6):
-            if abs(point[j] - start[j]) > band:
-                return False
-    return True

@@ -15,7 +15,9 @@ solver called without a seed and with the sampled q as seed:
 * missing: reference roots the unseeded answer lacks (not within 1e-6 rad mod 2pi, nor one root
   with a returned one: the segment between them verifies on Pinocchio at 1e-9);
 * wrong: returned solutions off by more than 1e-9 on Pinocchio; the largest residual, and the
-  rows above 1e-12;
+  rows above 1e-12 (of them, those flagged singular; apart, those set onto a joint limit: a
+  root up to tolerance / lever outside a limit counts as on it, as in the families, and keeps
+  the residual of the part outside);
 * seed-dependent: poses whose regular roots (not flagged "singular") differ with and without the
   seed (mod 2pi, 1e-9 rad): the seed may choose a member of a curve of solutions, not a root;
 * the median time of an unseeded call.
@@ -82,8 +84,8 @@ def measure(robot: Robot, solver: General6RSolver, Q: np.ndarray, starts: int,
     reference = RootReference(robot, model, starts=starts)
     targets = model.fk(Q)
     figures = {"poses": len(Q), "reference_roots": 0, "missing": 0, "poses_missing": 0,
-               "wrong": 0, "worst": 0.0, "above_1e-12": 0, "seed_dependent": 0, "odd": 0,
-               "exceptions": 0}
+               "wrong": 0, "worst": 0.0, "above_1e-12": 0, "above_1e-12_singular": 0,
+               "above_1e-12_on_limit": 0, "seed_dependent": 0, "odd": 0, "exceptions": 0}
     times = []
     for q, T in zip(Q, targets, strict=True):
         try:
@@ -109,7 +111,12 @@ def measure(robot: Robot, solver: General6RSolver, Q: np.ndarray, starts: int,
             error = np.maximum(position, rotation)
             figures["worst"] = max(figures["worst"], float(error.max()))
             figures["wrong"] += int(np.sum(error > TOLERANCE))
-            figures["above_1e-12"] += int(np.sum(error > RESIDUAL))
+            on_limit = np.any((unseeded.q == robot.lower) | (unseeded.q == robot.upper), axis=1)
+            figures["above_1e-12"] += int(np.sum((error > RESIDUAL) & ~on_limit))
+            figures["above_1e-12_on_limit"] += int(np.sum((error > RESIDUAL) & on_limit))
+            singular = np.array(["singular" in flag for flag in unseeded.flags])
+            figures["above_1e-12_singular"] += int(np.sum((error > RESIDUAL) & singular
+                                                          & ~on_limit))
         if seed_dependent(unseeded, seeded):
             figures["seed_dependent"] += 1
             report(f"  seed-dependent at q = {q.tolist()}")

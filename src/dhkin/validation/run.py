@@ -82,7 +82,12 @@ from dhkin.transforms import pose_error
 from dhkin.validation import arguments
 from dhkin.validation.adapters import IKCallable, own_ik
 from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, CallResult, IKCaller, takes_seed
-from dhkin.validation.multistart import RootReference, check_reference, needs_reference
+from dhkin.validation.multistart import (
+    RootReference,
+    check_reference,
+    missing_roots,
+    needs_reference,
+)
 from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
 from dhkin.validation.report import OUTCOMES, SampleResult, ValidationReport
 from dhkin.validation.samples import (
@@ -201,6 +206,10 @@ def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64]
     found, closest = _matched(robot, model, Q, q_sampled,
                               _compared_joints(robot, q_sampled, seeded), joint_tolerance,
                               residual)
+    if not found and robot.dof == 6 and all(j.is_revolute for j in robot.table.joints):
+        # one root with a returned solution at the tolerance: the segment between them solves
+        # the pose too (near a singularity the pose cannot tell them apart)
+        found = not missing_roots(model, T, q_sampled[None], Q, tolerance, joint_tolerance)
     if not found:
         return _Checked("missing", f"closest returned solution differs by {closest:.2e} "
                                    "(mod 2pi)", position, rotation), Q
@@ -370,11 +379,14 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
                  if settings.complete_expected and needs_reference(robot) else None)
     check_branches = settings.complete_expected and robot.complete_ik and reference is None
     referenced = reference_samples(sets)
+    # an IK complete without a seed (the general 6R solver's arms) is run unseeded: a seed may
+    # choose a free joint (the continuity call below), it must not find roots
+    unseeded = reference is not None
     for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", settings.progress):
-        call = caller(targets[k], q[k])
+        call = caller(targets[k], None if unseeded else q[k])
         returned = call.solutions
         checked, Q = _check_sample(robot, model, q[k], targets[k], call, tolerance,
-                                   joint_tolerance, seeded)
+                                   joint_tolerance, seeded and not unseeded)
         outcome, detail = checked.outcome, checked.detail
         all_position.append(checked.position)
         all_rotation.append(checked.rotation)
@@ -391,9 +403,8 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
                     for name, closest in lacking)
         if outcome == "success" and reference is not None and referenced[k]:
             report.branch_checked += 1
-            outcome, detail, missing = check_reference(
-                robot, model, caller, reference, targets[k], call if not seeded else None,
-                tolerance, joint_tolerance, all_position, all_rotation)
+            outcome, detail, missing = check_reference(model, reference, targets[k], Q,
+                                                       tolerance, joint_tolerance)
         returned_perturbed: list[NDArray[np.float64]] = []
         if outcome == "success" and seeded and np.all(np.isfinite(perturbed[k])):
             report.continuity_checked += 1

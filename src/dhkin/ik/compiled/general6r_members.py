@@ -51,7 +51,8 @@ def walk(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float
     land on a distinct root nearer the seed); a failed step is retried a quarter as long,
     down to ``band`` (:data:`WALK_STEPS` trials), and the walk ends where the seed's offset
     along the weak directions is within ``tolerance`` (rad). Where the pose is only
-    near-singular Newton returns to the root, or lands on another one, and q does not move.
+    near-singular Newton returns to the root, or lands on another one (near a fold), and q
+    does not move.
     error: the residuals (position, rotation) of the final q, where it moved."""
     target = np.ascontiguousarray(T[:3])
     fixed = np.zeros(6, np.bool_)

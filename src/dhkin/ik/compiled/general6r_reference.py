@@ -34,11 +34,12 @@ def _wrap(x: float) -> float:
 
 @jit
 def multistart(chain: NDArray[np.float64], T: NDArray[np.float64],
-               starts: NDArray[np.float64], tolerance: float,
+               starts: NDArray[np.float64], tolerance: float, patience: int,
                roots: NDArray[np.float64]) -> int:
     """Newton from every row of ``starts`` (k, 6) towards the target T; the distinct joint
     vectors (wrapped to (-pi, pi]) that verify at ``tolerance`` into the rows of roots (at most
-    its length); returns their number. Two are one root when they lie within MAX_JOINT_STEP of
+    its length); returns their number. The starts stop early once ``patience`` of them in a
+    row found no new root. Two are one root when they lie within MAX_JOINT_STEP of
     each other and their midpoint verifies too (the solver's merging rule). Each root is then
     polished by monotone Newton steps as far as the arithmetic allows: an isolated root does
     not move, but a point that verified in the cloud around a singular root (within
@@ -50,7 +51,10 @@ def multistart(chain: NDArray[np.float64], T: NDArray[np.float64],
     q = np.empty(6)
     middle = np.empty(6)
     found = 0
+    last_new = 0
     for index in range(starts.shape[0]):
+        if index - last_new >= patience:
+            break
         for j in range(6):
             q[j] = starts[index, j]
         refine(chain, target, q, fixed, tolerance, START_BUDGET, GROWTH, 0.0)
@@ -78,6 +82,7 @@ def multistart(chain: NDArray[np.float64], T: NDArray[np.float64],
         for j in range(6):
             roots[found, j] = q[j]
         found += 1
+        last_new = index
     for index in range(found):
         for j in range(6):
             q[j] = roots[index, j]

@@ -22,7 +22,7 @@ from dhkin.ik.compiled.chain import (
     fk_frames,
     refine,
 )
-from dhkin.ik.compiled.general6r_track import track
+from dhkin.ik.compiled.general6r_track import moved_target, track
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.plan import FK_ROUNDING
 
@@ -80,8 +80,8 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
     them). Starts whose ``origin`` has PAIRED (near-real complex pairs of eigenvalues) get
     PAIR_BUDGET; the roots reached from SHARED ones (a cluster of eigenvalues) have their
     fold partner probed where their singular value is at most PROBE_SIGMA
-    (:func:`fold_partner`); those of a moved pose (MOVED, ``moves`` the motions) that Newton
-    does not bring back at once are followed back (:func:`~.general6r_track.track`).
+    (:func:`fold_partner`); those of a moved pose (MOVED, ``moves`` the motions) are brought
+    back by :func:`_back_from_moved`.
     Newton runs until the residual is REFINE_FRACTION of the tolerance on the oracle's FK too
     (:func:`refine_tolerance`). Returns (roots found, candidates that did not verify); sigmas:
     :func:`smallest_singular` of each root (``lever``, ``band``)."""
@@ -96,18 +96,15 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
     for index in range(n_starts):
         for j in range(6):
             q[j] = starts[index, j]
-        # a start of a moved pose lies within ~e / sigma of a regular root: Newton reaches it
-        # in a few steps, or the root is followed back below (as a complex pair's start)
-        budget = PAIR_BUDGET if origin[index] & (PAIRED | MOVED | MOVED << 1) else BUDGET
-        refine(chain, target, q, fixed, goal, budget, GROWTH, 0.0)
-        position, rotation = check(chain, q, target, state)
         moved = origin[index] // MOVED
-        if not (position <= tolerance and rotation <= tolerance) and moved:
-            # a start of a moved pose that Newton did not bring back: follow its root back
-            for j in range(6):
-                q[j] = starts[index, j]
-            if track(chain, target, q, moves[0 if moved & 1 else 1], goal, tolerance):
-                position, rotation = check(chain, q, target, state)
+        if moved:
+            position, rotation = _back_from_moved(chain, target, q,
+                                                  moves[0 if moved & 1 else 1], goal,
+                                                  tolerance)
+        else:
+            budget = PAIR_BUDGET if origin[index] & PAIRED else BUDGET
+            refine(chain, target, q, fixed, goal, budget, GROWTH, 0.0)
+            position, rotation = check(chain, q, target, state)
         if not (position <= tolerance and rotation <= tolerance):
             failed += 1
             continue
@@ -149,6 +146,58 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
         sigmas[found] = smallest_singular(chain, q, lever, band)
         found += 1
     return found, failed
+
+
+@jit
+def _travel(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    """The largest joint difference (wrapped) between a and b."""
+    largest = 0.0
+    for j in range(6):
+        largest = max(largest, abs(_wrap(a[j] - b[j])))
+    return largest
+
+
+@jit
+def _reach(move: NDArray[np.float64]) -> float:
+    """How far (rad) Newton may carry a moved pose's root to the pose's before the root is
+    followed back instead: sqrt(e), e the motion's rotation (rad). A root of singular value
+    sigma moves by ~e / sigma under the motion: within sqrt(e) where sigma >= sqrt(e) (1e-2
+    at e = 1e-4); farther, near a singular point, Newton may reach a neighbour of its root."""
+    return math.sqrt(math.sqrt(move[0] ** 2 + move[1] ** 2 + move[2] ** 2))
+
+
+@jit
+def _back_from_moved(chain: NDArray[np.float64], target: NDArray[np.float64],
+                     q: NDArray[np.float64], move: NDArray[np.float64], goal: float,
+                     tolerance: float) -> tuple[float, float]:
+    """A start of a moved pose (``move``, :mod:`dhkin.ik.general6r_moves`) to a root of the pose
+    itself (target), in place; its residuals there. The start is refined on the moved pose
+    first (the elimination's start of a nearly singular pose can be off its own root), then
+    Newton goes to the pose; where that travels beyond :func:`_reach`, or fails, the moved
+    root is followed back along the path (:func:`~.general6r_track.track`). A start that is no
+    root of the moved pose (a complex pair's) gets a short direct Newton."""
+    fixed = np.zeros(6, np.bool_)
+    state = np.empty(12)
+    moved = np.empty((3, 4))
+    start = q.copy()
+    moved_target(move, 1.0, target, moved)
+    refine(chain, moved, q, fixed, goal, PAIR_BUDGET, GROWTH, 0.0)
+    position, rotation = check(chain, q, moved, state)
+    if not (position <= tolerance and rotation <= tolerance):
+        for j in range(6):
+            q[j] = start[j]
+        refine(chain, target, q, fixed, goal, PAIR_BUDGET, GROWTH, 0.0)
+        return check(chain, q, target, state)
+    root = q.copy()
+    refine(chain, target, q, fixed, goal, PAIR_BUDGET, GROWTH, 0.0)
+    position, rotation = check(chain, q, target, state)
+    if position <= tolerance and rotation <= tolerance and _travel(root, q) <= _reach(move):
+        return position, rotation
+    for j in range(6):
+        q[j] = root[j]
+    if track(chain, target, q, move, goal, tolerance):
+        return check(chain, q, target, state)
+    return math.inf, math.inf
 
 
 @jit

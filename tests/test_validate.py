@@ -497,3 +497,22 @@ def test_general_6r_arms_are_validated_completely() -> None:
     lacking = validate(robot, nearest_only, n=60, seed=1, reference="exact")
     assert lacking.counts["missing"] == lacking.counts["wrong"] == 0
     assert lacking.rate("missing_branch") > 0.5 and not lacking.ok
+
+
+def test_validate_sees_the_roots_the_old_general_solver_lost() -> None:
+    """Arms without a closed form are checked unseeded against an independent multistart
+    reference (dhkin.validation.multistart): the general 6R solver as it was before issue 26
+    (one root per eigenvalue, the seed a Newton start: broken.general6r_one_root_per_eigenvalue)
+    is caught as missing at special angles; today's solver passes."""
+    robot = dhkin.load("fanuc_crx10ia")
+    report = validate(robot, broken.general6r_one_root_per_eigenvalue, n=100, seed=2,
+                      reference="exact")
+    assert report.branch_checked > 0 and not report.ok
+    assert report.counts["missing_branch"] > 0 and report.counts["missing"] > 0
+    lost = [f for f in report.failures if f.outcome == "missing_branch"]
+    assert any(f.sample_set == "special" for f in lost)
+    assert all(b.startswith("root q=(") for f in lost for b in f.missing_branches)
+    own = validate(robot, n=100, seed=2, reference="exact")
+    assert own.branch_checked == report.branch_checked
+    assert own.ok and own.counts["missing_branch"] == 0 and own.counts["missing"] == 0
+

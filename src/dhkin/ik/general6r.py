@@ -35,6 +35,7 @@ from dhkin.dh import DHTable
 from dhkin.errors import FamilyError, InputError
 from dhkin.ik.general6r_answer import copies as copies_within
 from dhkin.ik.general6r_answer import (
+    distinct_rows,
     onto_limits,
     pack,
     seed_members,
@@ -391,7 +392,8 @@ class General6RSolver:
         if seed is None:  # as in the families: without a seed, free joints are chosen near 0
             seed = np.zeros(6)
         if np.any(singular):
-            keep = seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
+            keep = seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever,
+                                (self.table.lower, self.table.upper, tolerance / lever))
             roots, errors, singular = roots[keep], errors[keep], singular[keep]
         if roots.shape[0] == 0:
             reason = ("no real solution: the elimination found no root that verifies on the "
@@ -422,10 +424,15 @@ class General6RSolver:
             kept = np.empty(found, np.int64)
             count = nearest_copies(chain, tip_target, roots, errors, found, reference,
                                    self.table.lower, self.table.upper, slack,
-                                   self.verification_tolerance(tolerance, lever), lever, q_out,
-                                   residuals, kept)
+                                   verify, lever, np.ascontiguousarray(singular),
+                                   singular_band(verify), q_out, residuals, kept)
             q_out, residuals = q_out[:count], residuals[:count]
             out_flags = [flags[k] for k in kept[:count].tolist()]
+            if any(out_flags):  # singular members set onto a limit may meet: one root
+                distinct = distinct_rows(q_out, [bool(f) for f in out_flags], chain,
+                                         tip_target, verify)
+                q_out, residuals = q_out[distinct], residuals[distinct]
+                out_flags = [out_flags[k] for k in np.flatnonzero(distinct)]
         if q_out.shape[0] == 0:
             return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
                                dropped=failed,

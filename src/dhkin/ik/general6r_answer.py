@@ -32,7 +32,9 @@ def singular_band(tolerance: float) -> float:
 def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
                  singular: NDArray[np.bool_], seed: NDArray[np.float64],
                  chain: NDArray[np.float64], tip_target: NDArray[np.float64],
-                 tolerance: float, lever: float) -> NDArray[np.bool_]:
+                 tolerance: float, lever: float,
+                 limits: tuple[NDArray[np.float64], NDArray[np.float64], float] | None = None
+                 ) -> NDArray[np.bool_]:
     """The seed's choice where a joint is free, in place, as the families' seeded candidate
     (the member of the solution family nearest the seed, docs/ik_core.md): each singular root
     moves along the solutions towards the seed (:func:`dhkin.ik.compiled.general6r_members.walk`),
@@ -40,9 +42,12 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
     singular, nearer the seed, and tied to the root by a segment of solutions
     (:func:`~dhkin.ik.compiled.general6r_members.on_segment`: a free pair of coincident axes,
     where the weak directions of a cloud of near-solutions make walking stall). The seed is
-    never a root of its own: the roots stay those the elimination found. Returns which roots
-    to keep: a root that moved onto an earlier one (their midpoint verifies, the merging
-    rule) is one root with it."""
+    never a root of its own: the roots stay those the elimination found. ``limits`` (lower,
+    upper, slack; widened to the singular band, the width of a singular root's cloud): a
+    root whose member has no 2pi copy within them, where the root itself has, stays where it
+    was (a near-singular root on a joint limit). Returns which roots to
+    keep: a root that moved onto an earlier one (their midpoint verifies, the merging rule)
+    is one root with it."""
     from dhkin.ik.compiled.chain import MAX_JOINT_STEP, check
     from dhkin.ik.compiled.general6r_members import on_segment, seed_projection, walk
 
@@ -54,6 +59,7 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
                               projected_error)
     distance_projected = float(np.sum(wrap(projected - seed) ** 2))
     for index in np.flatnonzero(singular):
+        found, found_error = roots[index].copy(), errors[index].copy()
         q = np.ascontiguousarray(roots[index])
         walk(chain, target, q, seed, tolerance, lever, band, errors[index])
         if (reached and distance_projected < float(np.sum(wrap(q - seed) ** 2))
@@ -62,6 +68,10 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
             errors[index] = projected_error
             # damped Newton stops near, not at, the member nearest the seed: walk the rest
             walk(chain, target, q, seed, tolerance, lever, band, errors[index])
+        margin = max(limits[2], band) if limits is not None else 0.0
+        if (limits is not None and not copies(limits[0], limits[1], q, seed, False, margin)
+                and copies(limits[0], limits[1], found, seed, False, margin)):
+            q, errors[index] = found, found_error
         roots[index] = q
     keep = np.ones(roots.shape[0], np.bool_)
     state = np.empty(12)
@@ -73,6 +83,30 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
             if np.max(np.abs(step)) > MAX_JOINT_STEP:
                 continue
             position, rotation = check(chain, np.ascontiguousarray(roots[other] + 0.5 * step),
+                                       target, state)
+            if position <= tolerance and rotation <= tolerance:
+                keep[index] = False
+                break
+    return keep
+
+
+def distinct_rows(q: NDArray[np.float64], singular: list[bool], chain: NDArray[np.float64],
+                  tip_target: NDArray[np.float64], tolerance: float) -> NDArray[np.bool_]:
+    """Which rows (k, 6) to keep: a singular row that is one root with an earlier row (within
+    MAX_JOINT_STEP, wrapped, and their midpoint verifies at ``tolerance``) is dropped."""
+    from dhkin.ik.compiled.chain import MAX_JOINT_STEP, check
+
+    target = np.ascontiguousarray(tip_target[:3])
+    state = np.empty(12)
+    keep = np.ones(q.shape[0], np.bool_)
+    for index in range(q.shape[0]):
+        if not singular[index]:
+            continue
+        for other in range(index):
+            step = wrap(q[index] - q[other])
+            if not keep[other] or np.max(np.abs(step)) > MAX_JOINT_STEP:
+                continue
+            position, rotation = check(chain, np.ascontiguousarray(q[other] + 0.5 * step),
                                        target, state)
             if position <= tolerance and rotation <= tolerance:
                 keep[index] = False

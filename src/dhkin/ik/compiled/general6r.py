@@ -392,7 +392,8 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
         if sigmas[k] <= band:
             return SETTLED
     count = nearest_copies(chain, tip_target, roots, errors, found, seed, lower, upper, slack,
-                           tolerance, lever, out_q, out_errors, kept)
+                           tolerance, lever, np.zeros(found, np.bool_), band, out_q,
+                           out_errors, kept)
     return count if count > 0 else SETTLED
 
 

@@ -298,31 +298,35 @@ def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
                    roots: NDArray[np.float64], errors: NDArray[np.float64], found: int,
                    reference: NDArray[np.float64], lower: NDArray[np.float64],
                    upper: NDArray[np.float64], slack: float, tolerance: float, lever: float,
-                   out_q: NDArray[np.float64], out_errors: NDArray[np.float64],
-                   kept: NDArray[np.int64]) -> int:
+                   singular: NDArray[np.bool_], band: float, out_q: NDArray[np.float64],
+                   out_errors: NDArray[np.float64], kept: NDArray[np.int64]) -> int:
     """Per root, per joint its 2pi copy nearest ``reference`` within the limits widened by
     ``slack`` (a value that far outside a limit counts as on it, as in the families: set onto
     it, the other joints refined by monotone Newton steps with it held there (a root on the
     limit up to rounding is then exact again), and verified on ``chain`` against T (3 or 4
     rows) at ``tolerance``); roots without such a copy, or that no longer verify, are left
-    out. Writes the kept rows in order into out_q, out_errors and their root indices into
-    kept; returns their number."""
+    out. A ``singular`` root lies anywhere in a cloud of near-solutions ~``band`` wide (its
+    position there is Newton's, 1e-8 rad off the reference's on a CRX-10iA root on two
+    limits): its slack is ``band``. Writes the kept rows in order into out_q, out_errors and
+    their root indices into kept; returns their number."""
     two_pi = 2.0 * math.pi
     target = np.ascontiguousarray(T[:3])
     state = np.empty(12)
     q = np.empty(6)
     held = np.zeros(6, np.bool_)
+    clipped = np.empty(6)
     count = 0
     for k in range(found):
         inside, moved = True, False
+        margin = max(slack, band) if singular[k] else slack
         for j in range(6):
             held[j] = False
             value = roots[k, j] + two_pi * np.rint((reference[j] - roots[k, j]) / two_pi)
-            if value < lower[j] - slack:
-                value += two_pi * math.ceil((lower[j] - slack - value) / two_pi)
-            if value > upper[j] + slack:
-                value -= two_pi * math.ceil((value - upper[j] - slack) / two_pi)
-            if value < lower[j] - slack or value > upper[j] + slack:
+            if value < lower[j] - margin:
+                value += two_pi * math.ceil((lower[j] - margin - value) / two_pi)
+            if value > upper[j] + margin:
+                value -= two_pi * math.ceil((value - upper[j] - margin) / two_pi)
+            if value < lower[j] - margin or value > upper[j] + margin:
                 inside = False
                 break
             if value < lower[j]:
@@ -334,11 +338,18 @@ def nearest_copies(chain: NDArray[np.float64], T: NDArray[np.float64],
             continue
         position, rotation = errors[k, 0], errors[k, 1]
         if moved:
+            for j in range(6):
+                clipped[j] = q[j]
             refine(chain, target, q, held, refine_tolerance(tolerance, lever), BUDGET, 1.0,
                    0.0)
             for j in range(6):
                 q[j] = min(max(q[j], lower[j]), upper[j])
             position, rotation = check(chain, q, target, state)
+            if not (position <= tolerance and rotation <= tolerance):
+                # the held joints leave Newton no way back (a singular root): as it was
+                for j in range(6):
+                    q[j] = clipped[j]
+                position, rotation = check(chain, q, target, state)
             if not (position <= tolerance and rotation <= tolerance):
                 continue
         for j in range(6):

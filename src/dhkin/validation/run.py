@@ -41,16 +41,24 @@ Outcome per sample (one each, the first that applies, in this order):
   fixes q only to about (pose uncertainty) / sigma_min(J), so the joint tolerance there is
   ``joint_tolerance + max(POSE_ROUNDING, reference deviation, residual) / sigma_min``
   (sigma_min from Pinocchio's Jacobian at the sampled q; residual: the returned solutions'
-  largest error on the reference);
+  largest error on the reference); on a six-revolute arm a returned solution that is one root
+  with q (the segment between them solves the pose at the tolerance) matches it too;
 * ``missing_branch``: a branch of the complete solution set is not among the solutions, on
-  any pose, whether or not the sampled q lies on it. The branches of a pose are dhkin's own
-  complete answer ``robot.ik(T, q_seed=q, copies=False)``: the closed-form family's (one
-  solution per branch), or for six-revolute arms without a family the general 6R solver's
-  (every root; dhkin.ik.general6r); those that verify on the reference. Each must be matched
-  by a returned solution like the sampled q is above (mod 2pi, same widening at the branch's
-  own sigma_min; on the wrist singularity, where a branch is a family, joints 1 and 5 only).
-  Checked for robots with a complete IK (``robot.complete_ik``) and IKs that promise every
-  solution (``complete_expected``);
+  any pose, whether or not the sampled q lies on it. For an arm with a closed-form family the
+  branches of a pose are dhkin's own answer ``robot.ik(T, q_seed=q, copies=False)`` (one
+  solution per branch), those that verify on the reference; each must be matched by a
+  returned solution like the sampled q is above (mod 2pi, same widening at the branch's own
+  sigma_min; on the wrist singularity, where a branch is a family, joints 1 and 5 only). For
+  a six-revolute arm without one (``robot.ik_family == "general6r"``) the reference is
+  independent of dhkin's IK: every isolated root (sigma_min >= 1e-6) of a multistart of Newton
+  from fixed starts, verified on the reference (:mod:`dhkin.validation.multistart`), on every
+  other special-angle sample, every 10th near-singular and every 100th uniform one
+  (:func:`~dhkin.validation.samples.reference_samples`); each must be within the joint
+  tolerance of a solution of the IK called without a seed, or one root with it (the segment
+  between them solves the pose). Such IKs are called unseeded for every sample (a seed may
+  choose a free joint, in the continuity call below; it must not find roots). Checked for
+  robots with a complete IK (``robot.complete_ik``) and IKs that promise every solution
+  (``complete_expected``);
 * ``discontinuous``: on the singular sets (:data:`CONTINUITY_SETS`), an IK that takes ``q_seed``
   is called a second time with the seed perturbed by :data:`SEED_PERTURBATION` rad (each
   revolute joint +- at random, fixed seed, clipped to the limits); the returned solution nearest

@@ -78,10 +78,11 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
     those that are one root (close, and their midpoint verifies). Only the elimination's
     candidates are starts: the seed never is (it chooses among the roots, it does not find
     them). Starts whose ``origin`` has PAIRED (near-real complex pairs of eigenvalues) get
-    PAIR_BUDGET; the roots reached from SHARED ones (a cluster of eigenvalues) have their
-    fold partner probed where their singular value is at most PROBE_SIGMA
-    (:func:`fold_partner`); those of a moved pose (MOVED, ``moves`` the motions) are brought
-    back by :func:`_back_from_moved`.
+    PAIR_BUDGET; the roots reached from SHARED ones (a cluster of eigenvalues), and every root
+    of a moved pose, have their fold partner probed where their singular value is at most
+    PROBE_SIGMA (:func:`fold_partner`: a tilted-UR5 root 0.1 rad from its partner, both
+    5e-4 from singular near a singular root, was found no other way); those of a moved pose
+    (MOVED, ``moves`` the motions) are brought back by :func:`_back_from_moved`.
     Newton runs until the residual is REFINE_FRACTION of the tolerance on the oracle's FK too
     (:func:`refine_tolerance`). Returns (roots found, candidates that did not verify); sigmas:
     :func:`smallest_singular` of each root (``lever``, ``band``)."""
@@ -92,6 +93,11 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
     middle = np.empty(6)
     goal = refine_tolerance(tolerance, lever)
     probe = np.zeros(roots.shape[0], np.bool_)
+    # on a moved (ill-conditioned) pose every root near a fold gets its partner probed: the
+    # roots there cluster near a singular point, and the moved poses' can collide in pairs
+    moved_pose = False
+    for index in range(n_starts):
+        moved_pose = moved_pose or origin[index] >= MOVED
     found, failed = 0, 0
     for index in range(n_starts):
         for j in range(6):
@@ -112,13 +118,13 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
             q[j] = _wrap(q[j])
         duplicate = _known(chain, target, q, roots, found, tolerance, middle, state)
         if duplicate >= 0:
-            probe[duplicate] = probe[duplicate] or (origin[index] & SHARED) != 0
+            probe[duplicate] = probe[duplicate] or (origin[index] & SHARED) != 0 or moved_pose
             continue
         for j in range(6):
             roots[found, j] = q[j]
         errors[found, 0], errors[found, 1] = position, rotation
         sigmas[found] = smallest_singular(chain, q, lever, band)
-        probe[found] = (origin[index] & SHARED) != 0
+        probe[found] = (origin[index] & SHARED) != 0 or moved_pose
         found += 1
     # near a fold, the partner of each root with a small singular value (its eliminated joint
     # may equal this one's to the eigenvalues' accuracy)

@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dhkin/lanes.hpp"
 #include "dhkin/members.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
@@ -81,15 +82,19 @@ inline bool direct_branches(const Plan& plan, const TargetFrames& frames, const 
     if (found.near[b] & kFree) return false;  // a seeded candidate to try: the pipeline's step 2
   }
   info.why = found.why;
+  std::array<Joints, kBranches> candidates{};  // zero where not valid (its lane is ignored)
   for (int b = 0; b < kBranches; ++b) {
     if (!found.valid[b]) continue;
-    Joints candidate = found.q[b];
-    plan.wrap_revolute(candidate);
-    const PoseError error = check(plan.chain, candidate.data(), targets.T_at);
-    if (!error.within(tolerance)) return false;  // to be polished: the pipeline's step 3
-    branches.q[b] = candidate;
+    candidates[b] = found.q[b];
+    plan.wrap_revolute(candidates[b]);
+  }
+  const std::array<PoseError, kBranches> errors = check_lanes(plan.chain, candidates, targets.T_at);
+  for (int b = 0; b < kBranches; ++b) {
+    if (!found.valid[b]) continue;
+    if (!errors[b].within(tolerance)) return false;  // to be polished: the pipeline's step 3
+    branches.q[b] = candidates[b];
     branches.ok[b] = true;
-    branches.errors[b] = error;
+    branches.errors[b] = errors[b];
     ++info.candidates;
   }
   for (int a = 0; a < kBranches; ++a) {

@@ -51,7 +51,7 @@ class ClosedForm:
                   tolerance: float, frames: NDArray[np.float64], copies: bool,
                   q: NDArray[np.float64], ok: NDArray[np.bool_], flags: NDArray[np.uint8],
                   errors: NDArray[np.float64], totals: NDArray[np.int64],
-                  why: NDArray[np.float64], info: NDArray[np.float64],
+                  why: NDArray[np.float64], info: NDArray[np.float64], *,
                   direct: bool = True) -> None: ...
     def direct_answers(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                        tolerance: float, frames: NDArray[np.float64],

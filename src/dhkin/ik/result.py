@@ -95,10 +95,11 @@ class IKSolutions:
                  residuals: NDArray[np.float64] | None = None, reason: str = "",
                  family: str = "", numerical: bool = False, projection: float = 0.0,
                  dropped: int = 0) -> None:
-        self._q = q
-        self._configurations = configurations
-        self._flags = flags
-        self._residuals = np.zeros((0, 2)) if residuals is None else residuals
+        self._q: NDArray[np.float64] | None = q
+        self._configurations: tuple[Configuration, ...] | None = configurations
+        self._flags: tuple[frozenset[str], ...] | None = flags
+        self._residuals: NDArray[np.float64] | None = (np.zeros((0, 2)) if residuals is None
+                                                       else residuals)
         self._reason, self._family, self._numerical = reason, family, numerical
         self._projection, self._dropped = projection, dropped
         self._answer: Any = None
@@ -120,6 +121,7 @@ class IKSolutions:
     def q(self) -> NDArray[np.float64]:
         if self._q is None:
             self._q = self._answer.q()
+        assert self._q is not None
         return self._q
 
     @property
@@ -141,6 +143,7 @@ class IKSolutions:
     def residuals(self) -> NDArray[np.float64]:
         if self._residuals is None:
             self._residuals = self._answer.residuals()
+        assert self._residuals is not None
         return self._residuals
 
     @property

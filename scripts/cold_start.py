@@ -30,7 +30,8 @@ def _command(robot: dhkin.Robot, name: str, q: np.ndarray) -> float:
     T = robot.fk(q)
     rpy = np.degrees([np.arctan2(T[2, 1], T[2, 2]), -np.arcsin(np.clip(T[2, 0], -1, 1)),
                       np.arctan2(T[1, 0], T[0, 0])])
-    argv = [sys.executable, "-m", "dhkin.cli", "ik", name, "--xyz", *(repr(float(v)) for v in T[:3, 3]),
+    argv = [sys.executable, "-m", "dhkin.cli", "ik", name,
+            "--xyz", *(repr(float(v)) for v in T[:3, 3]),
             "--rpy", *(repr(float(v)) for v in rpy), "--deg"]
     start = time.perf_counter()
     done = subprocess.run(argv, capture_output=True, text=True, check=False)

@@ -56,6 +56,7 @@ from dhkin.dh import DHTable, Joint
 from dhkin.errors import DHError, FamilyError, InputError, URDFError
 from dhkin.fit import URDFChain, chain_deviation, fit_to_chain, read_chain
 from dhkin.ik.family import BAND
+from dhkin.import_names import IMPORTED_TABLE, described_error, table_link_names
 from dhkin.table_file import (
     ANGLE_UNITS,
     LENGTH_UNITS,
@@ -67,7 +68,7 @@ from dhkin.table_file import (
 )
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert, rot_y, xyz_rpy_to_matrix
-from dhkin.xml_text import NAME_RULE, name_problem
+from dhkin.xml_text import ROBOT_NAME_RULE, name_problem
 
 #: Random joint vectors (plus q = 0) on which the written table is checked (fixed seed 0).
 VERIFY_SAMPLES = 1000
@@ -76,6 +77,8 @@ VERIFY_SAMPLES = 1000
 TOOL0_TO_FLANGE = rot_y(-math.pi / 2)
 
 CONVENTIONS = ("standard", "modified")
+#: The tip among several leaf links when none is given (ROS-Industrial's tool frame).
+DEFAULT_TIP = "tool0"
 
 
 @dataclass(frozen=True)
@@ -119,14 +122,18 @@ class ImportResult:
 
 def import_description(path: str | Path, base: str | None = None, tip: str | None = None,
                        convention: str = "standard", units: Mapping[str, str] | None = None,
-                       xacro_args: Mapping[str, str] | None = None, name: str | None = None
-                       ) -> ImportResult:
+                       xacro_args: Mapping[str, str] | None = None, name: str | None = None,
+                       packages: Mapping[str, str | Path] | None = None,
+                       environ: Mapping[str, str] | None = None) -> ImportResult:
     """Import the chain ``base`` -> ``tip`` of a URDF or xacro file as a DH table.
 
-    ``base`` defaults to the root link, ``tip`` to the single leaf (URDFError listing the leaves
-    when there are several). ``units``: the table file's {"length": "m"|"mm", "angle":
-    "deg"|"rad"} (default m and deg). Raises URDFError for a description that cannot be read or
-    has a floating, planar or mimic joint on the chain, and DHError when the written table would
+    ``base`` defaults to the root link, ``tip`` to the single leaf, or to ``tool0`` among
+    several leaves (the ROS-Industrial tip; URDFError listing the leaves otherwise). ``units``:
+    the table file's {"length": "m"|"mm", "angle": "deg"|"rad"} (default m and deg).
+    ``xacro_args``, ``packages`` ({NAME: folder} for ``$(find NAME)``) and ``environ``: see
+    :func:`dhkin.description.read_description`. Raises URDFError naming the file (and the joint
+    and its line) for a description that cannot be read, has a floating, planar or mimic joint
+    on the chain, or a value a table cannot hold, and DHError when the written table would
     deviate from the description by more than DEFAULT_TOLERANCE (a bug: the construction is
     exact).
     """
@@ -134,23 +141,22 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
         raise InputError(f"convention: expected one of {list(CONVENTIONS)}, got {convention!r}",
                          field="convention", value=convention, expected=f"one of {CONVENTIONS}")
     units = _check_units(units)
-    description = read_description(path, xacro_args)
+    description = read_description(path, xacro_args, packages, environ)
     base = description.root if base is None else base
     tip = _default_tip(description) if tip is None else tip
     joints, ignored = _chain_joints(description, base, tip)
-    chain = read_chain(description.text, base, tip)
-    chain = replace(chain, source=description.source)
+    chain = read_chain(description.text, base, tip, source=description.source)
     if list(chain.joint_names) != [joint.name for joint in joints]:  # Pinocchio and yourdfpy
         raise URDFError(f"{description.source}: Pinocchio reads the chain {base} -> {tip} as "
                         f"{list(chain.joint_names)}, yourdfpy as {[j.name for j in joints]}; "
                         "expected the same joints")
-    notes = []
+    links, notes = table_link_names(description.source, joints, tip)
     continuous = [joint.name for joint in joints if joint.type == "continuous"]
     if continuous:
         notes.append(f"continuous joints {continuous} limited to +-360 deg")
     points, axes = chain.axis_lines()
     rows = rows_from_axes(points, axes, chain.revolute, chain.tip, convention, BAND.angle)
-    table = _table(description, chain, joints, rows, convention, name, base, tip)
+    table = _table(description, chain, joints, links, rows, convention, name, base, tip)
     if rows.near_parallel:
         pairs = ", ".join(f"{k + 1}-{k + 2}" for k in rows.near_parallel)
         notes.append(f"axes {pairs} are within the band of parallel but not parallel: nominal "
@@ -158,7 +164,10 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
         table = _corrected(table, chain)
     table = _clean(table, units)
     table = replace(table, source=_source(description, base, tip, notes))
-    written = read_back(table_to_yaml(table, units), source=description.source)
+    try:
+        written = read_back(table_to_yaml(table, units), source=IMPORTED_TABLE)
+    except DHError as exc:  # lower >= upper, a velocity < 0: named as the description has it
+        raise described_error(exc, description.source, joints) from exc
     deviation = chain_deviation(written, chain, VERIFY_SAMPLES)
     if max(deviation) > DEFAULT_TOLERANCE:
         raise DHError(f"{description.source}: the imported table deviates from the description "
@@ -186,12 +195,15 @@ def _check_units(units: Mapping[str, str] | None) -> dict[str, str]:
 
 
 def _default_tip(description: Description) -> str:
+    """The single leaf, else tool0 when it is a leaf (ROS-Industrial's tip)."""
     leaves = description.leaves()
-    if len(leaves) != 1:
-        raise URDFError(f"{description.source}: several leaf links {leaves}; expected --tip "
-                        "naming one of them", field="tip", value=None,
-                        expected=f"one of {leaves}")
-    return leaves[0]
+    if len(leaves) == 1:
+        return leaves[0]
+    if DEFAULT_TIP in leaves:
+        return DEFAULT_TIP
+    raise URDFError(f"{description.source}: several leaf links {leaves} and none is "
+                    f"{DEFAULT_TIP}; expected --tip naming one of them", field="tip", value=None,
+                    expected=f"one of {leaves}")
 
 
 def _chain_joints(description: Description, base: str, tip: str
@@ -231,20 +243,20 @@ def _chain_joints(description: Description, base: str, tip: str
 
 
 def _table(description: Description, chain: URDFChain, joints: list[DescriptionJoint],
-           rows: AxisRows,
-           convention: str, name: str | None, base: str, tip: str) -> DHTable:
+           links: list[str], rows: AxisRows, convention: str, name: str | None, base: str,
+           tip: str) -> DHTable:
     table_joints = []
     for i, joint in enumerate(joints):
         revolute = chain.revolute[i]
         lower, upper = joint.lower, joint.upper
         if joint.type == "continuous" or lower is None or upper is None:
             if joint.type != "continuous":
-                raise URDFError(f"{description.source}: joint {joint.name!r} ({joint.type}) has "
-                                "no lower/upper limit; expected both", field="joint",
+                raise URDFError(f"{description.source}: {joint.label} ({joint.type}) has no "
+                                "lower/upper limit; expected both", field="joint",
                                 value=joint.name, expected="<limit lower=... upper=...>")
             lower, upper = -CONTINUOUS_LIMIT, CONTINUOUS_LIMIT
         table_joints.append(Joint(
-            name=joint.name, link=joint.child, type="revolute" if revolute else "prismatic",
+            name=joint.name, link=links[i], type="revolute" if revolute else "prismatic",
             a=rows.a[i], alpha=rows.alpha[i], d=rows.fixed[i] if revolute else 0.0,
             theta=0.0 if revolute else rows.fixed[i], offset=rows.offset[i],
             direction=rows.direction[i], lower=float(lower), upper=float(upper),
@@ -256,11 +268,14 @@ def _table(description: Description, chain: URDFChain, joints: list[DescriptionJ
     if problem is not None:
         origin = "--name" if name is not None else f"the file name {description.source}"
         raise InputError(f"name (from {origin}): {problem}; give a name with --name",
-                         field="name", value=table_name, expected=NAME_RULE)
-    return DHTable(name=table_name, convention=convention,  # type: ignore[arg-type]
-                   joints=tuple(table_joints), base=rows.frame_0, tool=tool, flange=flange,
-                   description=f"{description.robot_name}, imported from "
-                               f"{Path(description.source).name} ({base} -> {tip})")
+                         field="name", value=table_name, expected=ROBOT_NAME_RULE)
+    try:
+        return DHTable(name=table_name, convention=convention,  # type: ignore[arg-type]
+                       joints=tuple(table_joints), base=rows.frame_0, tool=tool, flange=flange,
+                       description=f"{description.robot_name}, imported from "
+                                   f"{Path(description.source).name} ({base} -> {tip})")
+    except DHError as exc:  # a value a table cannot hold: named as the description has it
+        raise described_error(exc, description.source, joints) from exc
 
 
 def _flange(description: Description, base: str, tip: str, frame_n: NDArray[np.float64],

@@ -26,7 +26,9 @@ q. How the rows are found, in either convention (DESIGN.md, "The DH table file")
    model when one fits within the band) plus per-joint ``correction`` transforms fitted by
    :func:`dhkin.fit.fit_corrections`: corrections appear only where no exact DH exists.
 5. **Datasheet numbers.** Every DH value, base and tool component is written as the shortest
-   decimal (in the table's units) within :data:`CLEAN` of the exact value; limits, velocities
+   decimal (in the table's units) within :data:`CLEAN` of the exact value (lengths in metres;
+   angles in radians divided by the chain's reach in metres, at least 1, so that a rounded
+   angle moves no point of a 300 m chain more than a short arm's); limits, velocities
    and efforts are copied as they are. The written table, read back, is checked against the
    description on :data:`VERIFY_SAMPLES` random joint vectors: at most DEFAULT_TOLERANCE.
 
@@ -162,7 +164,7 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
         notes.append(f"axes {pairs} are within the band of parallel but not parallel: nominal "
                      "DH rows with fitted corrections")
         table = _corrected(table, chain)
-    table = _clean(table, units)
+    table = _clean(table, units, _reach(chain))
     table = replace(table, source=_source(description, base, tip, notes))
     try:
         written = read_back(table_to_yaml(table, units), source=IMPORTED_TABLE)
@@ -311,40 +313,50 @@ def _corrected(table: DHTable, chain: URDFChain) -> DHTable:
     return fit_to_chain(ideal_model(first), chain)
 
 
-def _clean(table: DHTable, units: Mapping[str, str]) -> DHTable:
+def _clean(table: DHTable, units: Mapping[str, str], reach: float) -> DHTable:
     """Every DH value, correction, base, tool and flange component as the shortest decimal in
-    ``units`` within CLEAN of it (limits, velocities and efforts untouched)."""
+    ``units`` within CLEAN of it: CLEAN metres for a length, CLEAN / ``reach`` radians for an
+    angle (``reach``: the chain's extent in metres, at least 1), so that no rounding moves a
+    point of the arm by more than CLEAN (a 300 m chain's angles rounded to 1e-12 rad would move
+    its tip by 3e-10 m each). Limits, velocities and efforts are untouched."""
     length, angle = units["length"], units["angle"]
+
+    def clean(value: float, unit: str) -> float:
+        return _shortest(value, unit, CLEAN / reach if unit in ANGLE_UNITS else CLEAN)
 
     def clean_joint(joint: Joint) -> Joint:
         variable = angle if joint.is_revolute else length
-        correction = tuple(_shortest(v, length if k < 3 else angle)
+        correction = tuple(clean(v, length if k < 3 else angle)
                            for k, v in enumerate(joint.correction))
-        return replace(joint, a=_shortest(joint.a, length), alpha=_shortest(joint.alpha, angle),
-                       d=_shortest(joint.d, length), theta=_shortest(joint.theta, angle),
-                       offset=_shortest(joint.offset, variable),
+        return replace(joint, a=clean(joint.a, length), alpha=clean(joint.alpha, angle),
+                       d=clean(joint.d, length), theta=clean(joint.theta, angle),
+                       offset=clean(joint.offset, variable),
                        correction=correction)  # type: ignore[arg-type]
 
+    def clean_frame(T: NDArray[np.float64]) -> NDArray[np.float64]:
+        xyz = [clean(float(v), length) for v in T[:3, 3]]
+        rpy = [clean(v, angle) for v in exact_rpy(T)]
+        return xyz_rpy_to_matrix(xyz, rpy)
+
     return replace(table, joints=tuple(clean_joint(j) for j in table.joints),
-                   base=_clean_frame(table.base, length, angle),
-                   tool=_clean_frame(table.tool, length, angle),
-                   flange=_clean_frame(table.flange, length, angle))
+                   base=clean_frame(table.base), tool=clean_frame(table.tool),
+                   flange=clean_frame(table.flange))
 
 
-def _clean_frame(T: NDArray[np.float64], length: str, angle: str) -> NDArray[np.float64]:
-    xyz = [_shortest(float(v), length) for v in T[:3, 3]]
-    rpy = [_shortest(v, angle) for v in exact_rpy(T)]
-    return xyz_rpy_to_matrix(xyz, rpy)
+def _reach(chain: URDFChain) -> float:
+    """The chain's extent (m, at least 1): the farthest joint axis point or tip from the base."""
+    points = np.vstack([chain.frames[:, :3, 3], chain.tip[None, :3, 3]])
+    return max(1.0, float(np.linalg.norm(points, axis=1).max()))
 
 
-def _shortest(value: float, unit: str) -> float:
-    """The SI value of the shortest decimal in ``unit`` (m, mm, rad or deg) within CLEAN of
-    ``value`` (SI), converted as :func:`dhkin.load_table` converts it."""
+def _shortest(value: float, unit: str, limit: float) -> float:
+    """The SI value of the shortest decimal in ``unit`` (m, mm, rad or deg) within ``limit``
+    (SI) of ``value`` (SI), converted as :func:`dhkin.load_table` converts it."""
     scale = LENGTH_UNITS[unit] if unit in LENGTH_UNITS else ANGLE_UNITS[unit]
     in_unit = value / scale
     for digits in range(18):
         back = round(in_unit, digits) * scale
-        if abs(back - value) <= CLEAN:
+        if abs(back - value) <= limit:
             return float(back)
     return value
 

@@ -81,6 +81,8 @@ TOOL0_TO_FLANGE = rot_y(-math.pi / 2)
 CONVENTIONS = ("standard", "modified")
 #: The tip among several leaf links when none is given (ROS-Industrial's tool frame).
 DEFAULT_TIP = "tool0"
+#: ROS-Industrial's base frame (a fixed frame below base_link): a leaf that is never the tip.
+ROS_INDUSTRIAL_BASE = "base"
 
 
 @dataclass(frozen=True)
@@ -129,8 +131,9 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
                        environ: Mapping[str, str] | None = None) -> ImportResult:
     """Import the chain ``base`` -> ``tip`` of a URDF or xacro file as a DH table.
 
-    ``base`` defaults to the root link, ``tip`` to the single leaf, or to ``tool0`` among
-    several leaves (the ROS-Industrial tip; URDFError listing the leaves otherwise). ``units``:
+    ``base`` defaults to the root link, ``tip`` to the single leaf (ROS-Industrial's ``base``
+    frame not counted), or to ``tool0`` among several leaves (the ROS-Industrial tip;
+    URDFError listing the leaves otherwise). ``units``:
     the table file's {"length": "m"|"mm", "angle": "deg"|"rad"} (default m and deg).
     ``xacro_args``, ``packages`` ({NAME: folder} for ``$(find NAME)``) and ``environ``: see
     :func:`dhkin.description.read_description`. Raises URDFError naming the file (and the joint
@@ -197,11 +200,13 @@ def _check_units(units: Mapping[str, str] | None) -> dict[str, str]:
 
 
 def _default_tip(description: Description) -> str:
-    """The single leaf, else tool0 when it is a leaf (ROS-Industrial's tip)."""
+    """The single leaf link (ROS-Industrial's ``base`` frame, a leaf below base_link, not
+    counted), else tool0 when it is a leaf (ROS-Industrial's tip)."""
     leaves = description.leaves()
-    if len(leaves) == 1:
-        return leaves[0]
-    if DEFAULT_TIP in leaves:
+    candidates = [leaf for leaf in leaves if leaf != ROS_INDUSTRIAL_BASE] or leaves
+    if len(candidates) == 1:
+        return candidates[0]
+    if DEFAULT_TIP in candidates:
         return DEFAULT_TIP
     raise URDFError(f"{description.source}: several leaf links {leaves} and none is "
                     f"{DEFAULT_TIP}; expected --tip naming one of them", field="tip", value=None,

@@ -30,6 +30,7 @@ it), an unset ``$(arg)``, a missing include, XML that is not well-formed, any ot
 from __future__ import annotations
 
 import os
+import re
 import threading
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -46,6 +47,8 @@ from dhkin.xml_file import read_xml_file
 XACRO_LOCK = threading.RLock()
 #: The attribute that carries an element's place through xacro (removed from the result).
 PLACE_ATTRIBUTE = "dhkin-place"
+#: The comment lines of xacro's banner (" ===...=== ", " |    This document ...   | ").
+_BANNER = re.compile(r" (?:=+|\|.*\|) ")
 #: The namespace declarations that make a file xacro (besides a name ending in ``.xacro``).
 XACRO_NAMESPACES = ("http://www.ros.org/wiki/xacro", "http://ros.org/wiki/xacro",
                     "http://wiki.ros.org/xacro")
@@ -72,8 +75,9 @@ def expand_xacro(path: str | Path, packages: Mapping[str, str | Path] | None = N
     """The URDF text of the xacro file ``path``: ``packages`` {NAME: folder} for
     ``$(find NAME)`` (else the environment and the checkout around ``path``:
     :mod:`dhkin.ros_packages`), ``args`` its ``name:=value`` arguments, ``environ`` the
-    environment to read (default ``os.environ``). URDFError naming the file and line when it
-    cannot be expanded."""
+    environment to read (default ``os.environ``). The text does not depend on where the files
+    lie (xacro's banner, which names the input's path, is left out). URDFError naming the file
+    and line when it cannot be expanded."""
     finder = PackageFinder.for_description(path, packages, environ)
     return expand_xacro_located(path, finder, args).text
 
@@ -93,8 +97,17 @@ def expand_xacro_located(path: str | Path, finder: PackageFinder,
             raise run.error(exc) from exc
         finally:
             del xacro.all_includes[:]  # xacro's list of every file it ever included
+    _drop_banner(document)
     places = run.collect(document)
     return XacroExpansion(text=str(document.toxml()), places=places)
+
+
+def _drop_banner(document: Any) -> None:
+    """Remove the banner xacro puts before the root (it names the input's absolute path, so the
+    URDF would depend on where the package lies): its rule and "|...|" comment lines."""
+    for node in list(document.childNodes):
+        if node.nodeType == node.COMMENT_NODE and _BANNER.fullmatch(node.data):
+            document.removeChild(node)
 
 
 def shown_path(path: str) -> str:

@@ -53,7 +53,7 @@ def oracle_q(table: dhkin.DHTable, seed: int = 5) -> np.ndarray:
             q = np.zeros(table.dof)
             q[k] = min(max(value, table.lower[k]), table.upper[k])
             special.append(q)
-    return np.vstack(special + [table.random_q(ORACLE_SAMPLES, np.random.default_rng(seed))])
+    return np.vstack([*special, table.random_q(ORACLE_SAMPLES, np.random.default_rng(seed))])
 
 
 def test_the_packages_hold_the_arms() -> None:

@@ -56,8 +56,8 @@ def table_link_names(source: str, joints: Sequence[DescriptionJoint], tip: str
             taken.add(renamed)
             notes.append(f"{joint.label} moves link {link!r}, a name dhkin's URDF gives a fixed "
                          f"frame: the table names the link {renamed!r}"
-                         + (f" and writes {link!r} as a fixed frame at the same place"
-                            if link == tip else ""))
+                         + (" and writes its own fixed tool0 at the same place"
+                            if link == tip == "tool0" else ""))
             link = renamed
         links.append(link)
     return links, notes

@@ -13,10 +13,8 @@ flange. When the OPW frames are not base_link and tool0, the file carries ``dhki
 description whose tool0 (or base) differs from the OPW flange (or base) only by rounding would
 get such a block for nothing (the MH12 URDF's tool0 rpy is 3.3e-7 rad off): within
 :data:`PLAIN_FORM_BAND` (position m, rotation rad) the fixed frames are left out and the file
-says by how much MoveIt's FK then differs from the table's. The band: the verification
-tolerance for positions, and for rotations 1e-6 rad, which holds the rounding of an rpy written
-with six decimals (each angle within 5e-7 rad, the three together within sqrt(3) x 5e-7 =
-8.7e-7 rad): a micrometre at a metre from the flange, far below any arm's repeatability.
+says by how much MoveIt's FK then differs from the table's (the band and its reasons:
+:data:`dhkin.opw.PLAIN_FORM_BAND`).
 """
 
 from __future__ import annotations
@@ -28,13 +26,15 @@ import numpy as np
 
 from dhkin.dh import DHTable
 from dhkin.files import output_folder, write_file
-from dhkin.opw import Matrix, OPWParameters, check_joint_vectors, fk_deviation, opw_parameters
-from dhkin.tolerances import DEFAULT_TOLERANCE
+from dhkin.opw import (
+    PLAIN_FORM_BAND,
+    Matrix,
+    OPWParameters,
+    check_joint_vectors,
+    fk_deviation,
+    opw_parameters,
+)
 from dhkin.transforms import matrix_to_rpy, rotation_angle
-
-#: Fixed frames (base_link -> OPW base, OPW flange -> tool0) within this (m, rad) of the
-#: identity are left out of the file (module docstring, "The plain form").
-PLAIN_FORM_BAND = (DEFAULT_TOLERANCE, 1e-6)
 
 #: The MoveIt plugin that reads the parameters (for a kinematics.yaml group entry).
 MOVEIT_PLUGIN = "moveit_opw_kinematics_plugin/MoveItOPWKinematicsPlugin"

@@ -151,9 +151,9 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
     tip = _default_tip(description) if tip is None else tip
     joints, ignored = _chain_joints(description, base, tip)
     chain = read_chain(description.text, base, tip, source=description.source)
-    if list(chain.joint_names) != [joint.name for joint in joints]:  # Pinocchio and yourdfpy
+    if list(chain.joint_names) != [joint.name for joint in joints]:  # Pinocchio and the outline
         raise URDFError(f"{description.source}: Pinocchio reads the chain {base} -> {tip} as "
-                        f"{list(chain.joint_names)}, yourdfpy as {[j.name for j in joints]}; "
+                        f"{list(chain.joint_names)}, the XML as {[j.name for j in joints]}; "
                         "expected the same joints")
     links, notes = table_link_names(description.source, joints, tip)
     continuous = [joint.name for joint in joints if joint.type == "continuous"]

@@ -184,8 +184,14 @@ class _Run:
             xacro.parse, xacro.eval_all, substitution._eval_find = saved
 
     def _mark(self, document: Any, file: str, text: str) -> None:
+        """Mark every non-xacro element of a file just parsed with the index of its place (the
+        elements and the start tags expat sees are the same, in the same order; where a
+        document type's entities made them differ, the file's elements stay unmarked and
+        messages name lines of the expanded text)."""
         elements = document.getElementsByTagName("*")
         lines = _start_lines(text)
+        if len(elements) != len(lines):
+            return
         for element, line in zip(elements, lines, strict=True):
             if not element.tagName.startswith("xacro:"):
                 element.setAttribute(PLACE_ATTRIBUTE, str(len(self.places)))

@@ -16,24 +16,30 @@ from .conftest import REPO
 
 SOURCE = REPO / "src"
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("foundation", ("dhkin.errors", "dhkin.transforms", "dhkin.dh", "dhkin.table_file",
+    ("foundation", ("dhkin._core", "dhkin.errors", "dhkin.transforms", "dhkin.dh",
+                    "dhkin.table_file",
                     "dhkin.table_yaml", "dhkin.table_values",
                     "dhkin.reference", "dhkin.urdf", "dhkin.validators", "dhkin.vendors",
                     "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description",
-                    "dhkin.xml_text", "dhkin.axes_to_dh", "dhkin.files")),
+                    "dhkin.xml_text", "dhkin.axes_to_dh", "dhkin.files", "dhkin.xml_file",
+                    "dhkin.ros_packages", "dhkin.urdf_outline", "dhkin.xacro_expansion",
+                    "dhkin.memory")),
     ("kinematics", ("dhkin.ik", "dhkin.ik.*", "dhkin.arm", "dhkin.opw",
-                    "dhkin.opw_yaml")),
+                    "dhkin.opw_yaml", "dhkin.opw_compare")),
     ("analysis", ("dhkin.singularity", "dhkin.singularity.*", "dhkin.maps", "dhkin.maps.*",
                   "dhkin.validation", "dhkin.validation.*", "dhkin.compare",
-                  "dhkin.importer")),
+                  "dhkin.importer", "dhkin.import_names")),
     ("facade", ("dhkin.robot",)),
-    ("application", ("dhkin", "dhkin.checks", "dhkin.cli", "dhkin.cli_input")),
+    ("application", ("dhkin", "dhkin.checks", "dhkin.cli", "dhkin.cli_input",
+                     "dhkin.cli_describe")),
 )
 
 
 def _modules() -> dict[str, Path]:
+    """Every module of the package: its Python files, and the compiled core by its type stub
+    (dhkin/_core.pyi; it imports nothing of the package)."""
     found = {}
-    for path in sorted((SOURCE / "dhkin").rglob("*.py")):
+    for path in sorted([*(SOURCE / "dhkin").rglob("*.py"), *(SOURCE / "dhkin").rglob("*.pyi")]):
         parts = path.relative_to(SOURCE).with_suffix("").parts
         name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
         found[name] = path

@@ -271,7 +271,7 @@ def test_cli_validate_vendor_reference_round_trip(capsys, tmp_path, monkeypatch)
     monkeypatch.chdir(REPO)
     files = {name: tmp_path / name for name in ("r.json", "r.md", "f.json", "g.json")}
     code, out, _ = run(capsys, "validate", "ur5", "--ik", "tests.broken:branch_dropped_off_seed",
-                       "--reference", "../shared/reference/ur5.urdf", "-n", "50",
+                       "--reference", "robots/vendor/ur5.urdf", "-n", "50",
                        "--json", str(files["r.json"]), "--report", str(files["r.md"]),
                        "--failures", str(files["f.json"]))
     assert code == 1
@@ -304,12 +304,12 @@ def test_cli_validate_vendor_frames(capsys, monkeypatch) -> None:
     --tip choose others, and a wrong one is a clear error naming the option."""
     monkeypatch.chdir(REPO)
     code, out, err = run(capsys, "validate", "aubo_i10", "--ik", "tests.broken:sign_flip",
-                         "--reference", "../shared/reference/aubo_i10.urdf", "-n", "10",
+                         "--reference", "robots/vendor/aubo_i10.urdf", "-n", "10",
                          "--failures", "/dev/null")
     assert code == 1, err
     assert "aubo_i10.urdf (base_link -> wrist3_Link)" in out
     code, out, err = run(capsys, "validate", "aubo_i10", "--ik", "tests.broken:sign_flip",
-                         "--reference", "../shared/reference/aubo_i10.urdf", "--tip", "tool0",
+                         "--reference", "robots/vendor/aubo_i10.urdf", "--tip", "tool0",
                          "-n", "10")
     assert code == 2
     assert "--tip" in err and "no frame named 'tool0'" in err and "Traceback" not in err
@@ -317,7 +317,7 @@ def test_cli_validate_vendor_frames(capsys, monkeypatch) -> None:
 
 @pytest.mark.parametrize(("args", "named"), [
     (["--reference", "no_such_vendor.urdf"], "--reference"),
-    (["--reference", "../shared/reference/ur5.urdf", "--base", "floor"], "--base"),
+    (["--reference", "robots/vendor/ur5.urdf", "--base", "floor"], "--base"),
     (["--reference", "exact", "--tip", "tool0"], "--tip"),
     (["-n", "0"], "argument -n: expected an integer >= 1"),
 ])

@@ -24,7 +24,7 @@ from dhkin.ik.compiled.chain import (
 )
 from dhkin.ik.compiled.general6r_track import moved_target, track
 from dhkin.ik.compiled.jit import jit
-from dhkin.ik.compiled.plan import FK_ROUNDING
+from dhkin.ik.core import FK_ROUNDING
 
 #: Refinement budget (chain evaluations) per candidate, and the growth Newton may take.
 BUDGET = 120

@@ -1,0 +1,64 @@
+"""Type information of dhkin._core, the compiled core (cpp/bindings.cpp)."""
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+BRANCHES: int
+WHY_SIZE: int
+ORTHONORMALITY_GATE: float
+BOTTOM_ROW_TOLERANCE: float
+FLAG_BAND: float
+MERGE_ANGLE: float
+FK_ROUNDING: float
+
+def pose_status(T: NDArray[np.float64]) -> int: ...
+def project(T: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]: ...
+def sincos(x: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def atan2(y: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def wrap(x: NDArray[np.float64]) -> NDArray[np.float64]: ...
+
+class Chain:
+    def __init__(self, before: NDArray[np.float64], revolute: NDArray[np.bool_],
+                 direction: NDArray[np.float64], offset: NDArray[np.float64],
+                 tail: NDArray[np.float64]) -> None: ...
+    @property
+    def dof(self) -> int: ...
+    def fk(self, q: NDArray[np.float64], out: NDArray[np.float64]) -> None: ...
+
+class Answer:
+    count: int
+    status: int
+    projection: float
+    candidates: int
+    verified: int
+    dropped: int
+    best_position: float
+    best_rotation: float
+    def q(self) -> NDArray[np.float64]: ...
+    def branch(self) -> NDArray[np.int16]: ...
+    def flags(self) -> NDArray[np.uint8]: ...
+    def residuals(self) -> NDArray[np.float64]: ...
+    def configuration_keys(self) -> list[tuple[int, tuple[int, ...]]]: ...
+    def why(self) -> NDArray[np.float64]: ...
+
+class ClosedForm:
+    def __init__(self, plan: dict[str, Any], frames: NDArray[np.float64]) -> None: ...
+    def solve(self, T: Any, seed: Any, tolerance: float, frames: NDArray[np.float64] | None,
+              copies: bool) -> Answer: ...
+    def principal(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
+                  tolerance: float, frames: NDArray[np.float64], copies: bool,
+                  q: NDArray[np.float64], ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+                  errors: NDArray[np.float64], totals: NDArray[np.int64],
+                  why: NDArray[np.float64], info: NDArray[np.float64], *,
+                  direct: bool = True) -> None: ...
+    def direct_answers(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
+                       tolerance: float, frames: NDArray[np.float64],
+                       answered: NDArray[np.bool_]) -> None: ...
+    def expand(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
+               tolerance: float, frames: NDArray[np.float64], copies: bool,
+               q: NDArray[np.float64], ok: NDArray[np.bool_], flags: NDArray[np.uint8],
+               errors: NDArray[np.float64], out_q: NDArray[np.float64],
+               out_valid: NDArray[np.bool_], out_branch: NDArray[np.int16],
+               out_flags: NDArray[np.uint8], out_errors: NDArray[np.float64]) -> None: ...

@@ -114,6 +114,7 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
         if not (position <= tolerance and rotation <= tolerance):
             failed += 1
             continue
+        position, rotation = _polish(chain, target, q, goal, position, rotation)
         for j in range(6):
             q[j] = _wrap(q[j])
         duplicate = _known(chain, target, q, roots, found, tolerance, middle, state)
@@ -142,6 +143,7 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
         position, rotation = check(chain, partner, target, state)
         if not (position <= tolerance and rotation <= tolerance):
             continue
+        position, rotation = _polish(chain, target, partner, goal, position, rotation)
         for j in range(6):
             q[j] = _wrap(partner[j])
         if _known(chain, target, q, roots, found, tolerance, middle, state) >= 0:
@@ -152,6 +154,26 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
         sigmas[found] = smallest_singular(chain, q, lever, band)
         found += 1
     return found, failed
+
+
+@jit
+def _polish(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np.float64],
+            goal: float, position: float, rotation: float) -> tuple[float, float]:
+    """A verified root whose residual is still above REFINE_FRACTION of ``goal`` (Newton's
+    budget ran out on the way: slow convergence near a fold) refined further, in place, by
+    monotone steps; its residuals."""
+    if max(position, rotation) <= REFINE_FRACTION * goal:
+        return position, rotation
+    fixed = np.zeros(6, np.bool_)
+    state = np.empty(12)
+    trial = q.copy()
+    refine(chain, target, trial, fixed, goal, BUDGET, 1.0, 0.0)
+    better_position, better_rotation = check(chain, trial, target, state)
+    if max(better_position, better_rotation) >= max(position, rotation):
+        return position, rotation
+    for j in range(6):
+        q[j] = trial[j]
+    return better_position, better_rotation
 
 
 @jit

@@ -177,33 +177,16 @@ def _polish(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[
 
 
 @jit
-def _travel(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
-    """The largest joint difference (wrapped) between a and b."""
-    largest = 0.0
-    for j in range(6):
-        largest = max(largest, abs(_wrap(a[j] - b[j])))
-    return largest
-
-
-@jit
-def _reach(move: NDArray[np.float64]) -> float:
-    """How far (rad) Newton may carry a moved pose's root to the pose's before the root is
-    followed back instead: sqrt(e), e the motion's rotation (rad). A root of singular value
-    sigma moves by ~e / sigma under the motion: within sqrt(e) where sigma >= sqrt(e) (1e-2
-    at e = 1e-4); farther, near a singular point, Newton may reach a neighbour of its root."""
-    return math.sqrt(math.sqrt(move[0] ** 2 + move[1] ** 2 + move[2] ** 2))
-
-
-@jit
 def _back_from_moved(chain: NDArray[np.float64], target: NDArray[np.float64],
                      q: NDArray[np.float64], move: NDArray[np.float64], goal: float,
                      tolerance: float) -> tuple[float, float]:
     """A start of a moved pose (``move``, :mod:`dhkin.ik.general6r_moves`) to a root of the pose
     itself (target), in place; its residuals there. The start is refined on the moved pose
     first (the elimination's start of a nearly singular pose can be off its own root), then
-    Newton goes to the pose; where that travels beyond :func:`_reach`, or fails, the moved
-    root is followed back along the path (:func:`~.general6r_track.track`). A start that is no
-    root of the moved pose (a complex pair's) gets a short direct Newton."""
+    Newton goes to the pose; where that fails, the moved root is followed back along the path
+    (:func:`~.general6r_track.track`). A start that is no root of the moved pose (a complex
+    pair's) gets a short direct Newton. (Where Newton carries a root near a singular point to
+    a neighbour of its own, the fold partners probed for every root of a moved pose find it.)"""
     fixed = np.zeros(6, np.bool_)
     state = np.empty(12)
     moved = np.empty((3, 4))
@@ -219,7 +202,7 @@ def _back_from_moved(chain: NDArray[np.float64], target: NDArray[np.float64],
     root = q.copy()
     refine(chain, target, q, fixed, goal, PAIR_BUDGET, GROWTH, 0.0)
     position, rotation = check(chain, q, target, state)
-    if position <= tolerance and rotation <= tolerance and _travel(root, q) <= _reach(move):
+    if position <= tolerance and rotation <= tolerance:
         return position, rotation
     for j in range(6):
         q[j] = root[j]

@@ -96,7 +96,7 @@ class General6RSolver:
         self.model, self.elimination = self._eliminator(arrangement)
         self._data = self.kernel_data()
         #: The moved poses of an ill-conditioned pose (:mod:`dhkin.ik.general6r_moves`): the
-        #: motions (2, 6) and their matrices (2, 4, 4).
+        #: motions (1, 6) and their matrices (1, 4, 4).
         self.moves = moves(self.model.scale)
         self.perturbations = perturbations(self.model.scale)
         self.fallback = fallback_starts(table.lower, table.upper)

@@ -69,8 +69,8 @@ def seed_members(roots: NDArray[np.float64], errors: NDArray[np.float64],
             # damped Newton stops near, not at, the member nearest the seed: walk the rest
             walk(chain, target, q, seed, tolerance, lever, band, errors[index])
         margin = max(limits[2], band) if limits is not None else 0.0
-        if (limits is not None and not copies(limits[0], limits[1], q, seed, False, margin)
-                and copies(limits[0], limits[1], found, seed, False, margin)):
+        if (limits is not None and not has_copy(limits[0], limits[1], q, margin)
+                and has_copy(limits[0], limits[1], found, margin)):
             q, errors[index] = found, found_error
         roots[index] = q
     keep = np.ones(roots.shape[0], np.bool_)
@@ -112,6 +112,14 @@ def distinct_rows(q: NDArray[np.float64], singular: list[bool], chain: NDArray[n
                 keep[index] = False
                 break
     return keep
+
+
+def has_copy(lower: NDArray[np.float64], upper: NDArray[np.float64], q: NDArray[np.float64],
+             slack: float) -> bool:
+    """Whether every joint of q has a 2pi copy within the limits widened by ``slack``."""
+    low, high = lower - slack, upper + slack
+    first = np.ceil((low - q) / TWO_PI)
+    return bool(np.all(q + TWO_PI * first <= high))
 
 
 def copies(lower: NDArray[np.float64], upper: NDArray[np.float64], q: NDArray[np.float64],

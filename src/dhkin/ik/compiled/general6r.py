@@ -58,9 +58,9 @@ CLUSTER = 1e-3
 MAX_PER_POSE = 24 * MAX_SPLIT
 
 
-#: Most candidates one pose can give: its own, the two moved poses' and the fallback starts
-#: of :func:`all_candidates` (at most FALLBACK_STARTS, :mod:`dhkin.ik.general6r_moves`).
-MAX_CANDIDATES = 3 * MAX_PER_POSE + 32
+#: Most candidates one pose can give: its own, the moved pose's and the fallback starts of
+#: :func:`all_candidates` (at most FALLBACK_STARTS, :mod:`dhkin.ik.general6r_moves`).
+MAX_CANDIDATES = 2 * MAX_PER_POSE + 32
 
 
 @jit

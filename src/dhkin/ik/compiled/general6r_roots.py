@@ -104,8 +104,10 @@ def settle(chain: NDArray[np.float64], T_dh: NDArray[np.float64], starts: NDArra
             q[j] = starts[index, j]
         moved = origin[index] // MOVED
         if moved:
-            position, rotation = _back_from_moved(chain, target, q,
-                                                  moves[0 if moved & 1 else 1], goal,
+            pose = 0
+            while not (moved >> pose) & 1:
+                pose += 1
+            position, rotation = _back_from_moved(chain, target, q, moves[pose], goal,
                                                   tolerance)
         else:
             budget = PAIR_BUDGET if origin[index] & PAIRED else BUDGET
@@ -233,8 +235,8 @@ def _known(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[n
 
 
 #: Bits of a start's origin (:func:`dhkin.ik.compiled.general6r.candidates`): a near-real
-#: complex pair of eigenvalues, a cluster of eigenvalues, the first moved pose (MOVED << 1:
-#: the second; :func:`dhkin.ik.compiled.general6r.all_candidates`).
+#: complex pair of eigenvalues, a cluster of eigenvalues, the first moved pose (MOVED << p:
+#: moved pose p; :func:`dhkin.ik.compiled.general6r.all_candidates`).
 PAIRED, SHARED, MOVED = 1, 2, 4
 
 

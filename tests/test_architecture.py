@@ -27,7 +27,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                   "dhkin.validation", "dhkin.validation.*", "dhkin.compare",
                   "dhkin.importer")),
     ("facade", ("dhkin.robot",)),
-    ("application", ("dhkin", "dhkin.checks", "dhkin.cli", "dhkin.cli_input")),
+    ("application", ("dhkin", "dhkin.checks", "dhkin.check_report", "dhkin.cli",
+                     "dhkin.cli_check", "dhkin.cli_input")),
 )
 
 

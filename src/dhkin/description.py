@@ -22,7 +22,7 @@ from dhkin.errors import URDFError
 
 #: Most joints (of any type, fixed ones included) a URDF may have: dhkin reads descriptions of
 #: single arms, and a real one, with its gripper, tool changer, cameras and sensor frames, has a
-#: few dozen (the reference descriptions in ../shared/reference have 7 to 12, the UR files with
+#: few dozen (the reference descriptions in robots/vendor have 7 to 12, the UR files with
 #: their fixed frames the most; a two-finger gripper adds 2 to 10). The limit
 #: is checked while the file is parsed, before Pinocchio or yourdfpy build anything, so that a
 #: runaway file (a generator loop, a whole cell of robots) gets a clear error instead of

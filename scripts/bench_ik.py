@@ -56,11 +56,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from dhkin.ik.compiled.direct import DEFER
 from numpy.typing import NDArray
 
 import dhkin
 from dhkin.errors import FamilyError
-from dhkin.ik.compiled.direct import DEFER
 from dhkin.ik.workers import default_workers
 from dhkin.opw import opw_parameters
 from dhkin.transforms import invert, pose_error

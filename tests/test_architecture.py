@@ -16,7 +16,8 @@ from .conftest import REPO
 
 SOURCE = REPO / "src"
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("foundation", ("dhkin.errors", "dhkin.transforms", "dhkin.dh", "dhkin.table_file",
+    ("foundation", ("dhkin._core", "dhkin.errors", "dhkin.transforms", "dhkin.dh",
+                    "dhkin.table_file",
                     "dhkin.table_yaml", "dhkin.table_values",
                     "dhkin.reference", "dhkin.urdf", "dhkin.validators", "dhkin.vendors",
                     "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description",
@@ -33,8 +34,10 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 
 
 def _modules() -> dict[str, Path]:
+    """Every module of the package: its Python files, and the compiled core by its type stub
+    (dhkin/_core.pyi; it imports nothing of the package)."""
     found = {}
-    for path in sorted((SOURCE / "dhkin").rglob("*.py")):
+    for path in sorted([*(SOURCE / "dhkin").rglob("*.py"), *(SOURCE / "dhkin").rglob("*.pyi")]):
         parts = path.relative_to(SOURCE).with_suffix("").parts
         name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
         found[name] = path

@@ -255,15 +255,15 @@ def test_worker_threads_share_a_batch_without_changing_it(load_robot, name):
 
 
 def test_ik_takes_any_array_layout_through_the_compiled_entry_point(load_robot):
-    """robot.ik calls kernels.solve_one's compiled entry point, which trusts its argument types:
-    lists, Fortran order, strided views, read-only and integer arrays must be converted first
-    and give the answers of the plain call."""
-    from dhkin.ik.compiled import pipeline
-
+    """robot.ik calls the compiled core, which reads C-contiguous float64 arrays: lists, Fortran
+    order, strided views, read-only and integer arrays must be converted first and give the
+    answers of the plain call."""
     robot = load_robot("ur5")
-    assert robot.ik_solver._one_kernel is not pipeline.solve_one  # the fast path is in use
     q = robot.table.random_q(50, np.random.default_rng(19))
     T = robot.fk(q)
+    answered = np.zeros(len(T), np.bool_)  # the fast path (the core's direct path) is in use
+    robot.ik_solver.core.direct_answers(T, q, 1e-9, robot.ik_solver.frames, answered)
+    assert answered.all()
     for i in range(len(T)):
         expected = robot.ik(np.ascontiguousarray(T[i]), q[i])
         wide = np.zeros((8, 8))

@@ -1,4 +1,4 @@
-"""The direct path (dhkin.ik.compiled.direct) answers a regular pose exactly as the pipeline does.
+"""The core's direct path (cpp/dhkin/pipeline.hpp) answers a regular pose as the pipeline does.
 
 The solver tries the direct path first and hands the poses it declines to the pipeline. That is
 only sound if, on every pose it accepts, its answer is the pipeline's bit for bit: solutions,
@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 import dhkin
-from dhkin.ik.compiled import pipeline
+from dhkin.ik.core import WHY_SIZE
+from dhkin.ik.solver import INFO
 from dhkin.transforms import rot_x
 from tests.test_ik_batch import ROBOTS, pose_set
 from tests.test_ik_vendor_poses import EXACT_TABLES, shoulder_singular_q, special_q, vendor
@@ -26,8 +27,8 @@ def _outputs(solver, n_poses: int) -> tuple[np.ndarray, ...]:
     B, n = solver.n_branches, solver.dof
     return (np.zeros((n_poses, B, n)), np.zeros((n_poses, B), np.bool_),
             np.zeros((n_poses, B), np.uint8), np.zeros((n_poses, B, 2)),
-            np.zeros((n_poses, B), np.int64), np.zeros((n_poses, pipeline.WHY_SIZE)),
-            np.zeros((n_poses, pipeline.INFO.size)))
+            np.zeros((n_poses, B), np.int64), np.zeros((n_poses, WHY_SIZE)),
+            np.zeros((n_poses, INFO.size)))
 
 
 def both_paths(robot: dhkin.Robot, T: np.ndarray, seeds: np.ndarray, frames: np.ndarray,
@@ -36,8 +37,9 @@ def both_paths(robot: dhkin.Robot, T: np.ndarray, seeds: np.ndarray, frames: np.
     solver = robot.ik_solver
     full, direct = _outputs(solver, len(T)), _outputs(solver, len(T))
     done = np.zeros(len(T), np.bool_)
-    pipeline.solve_batch(solver.plan, frames, T, seeds, 1e-9, copies, *full)
-    solver._direct_batch(solver.plan, frames, T, seeds, 1e-9, copies, *direct, done)
+    solver.core.principal(T, seeds, 1e-9, frames, copies, *full, direct=False)
+    solver.core.principal(T, seeds, 1e-9, frames, copies, *direct)
+    solver.core.direct_answers(T, seeds, 1e-9, frames, done)
     return full, direct, done
 
 

@@ -22,7 +22,7 @@ import pytest
 
 import dhkin
 from dhkin.errors import FamilyError, InputError
-from dhkin.ik.compiled.pose import BOTTOM_ROW_TOLERANCE, ORTHONORMALITY_GATE
+from dhkin.ik.core import BOTTOM_ROW_TOLERANCE, ORTHONORMALITY_GATE
 from dhkin.ik.family import BAND, fit_family
 from dhkin.ik.numerical import NumericalIK
 from dhkin.transforms import pose_error

@@ -36,7 +36,7 @@ import pytest
 
 import dhkin
 from dhkin.errors import FamilyError
-from dhkin.ik.compiled.bands import FLAG_BAND, MERGE_ANGLE
+from dhkin.ik.core import FLAG_BAND, MERGE_ANGLE
 from dhkin.ik.family import BAND, family_problems, fit_family
 from dhkin.ik.geometry import table_scale
 from dhkin.ik.offset_wrist import BRANCH_LABELS

@@ -41,7 +41,7 @@ import pytest
 import dhkin
 from dhkin.errors import FamilyError
 from dhkin.ik import ELBOW, SHOULDER, WRIST
-from dhkin.ik.compiled.bands import FLAG_BAND
+from dhkin.ik.core import FLAG_BAND
 from dhkin.ik.family import BAND, family_problems, fit_family
 from dhkin.ik.geometry import table_scale
 from dhkin.ik.numerical import NumericalIK

@@ -205,9 +205,9 @@ class General6RSolver:
     @staticmethod
     def verification_tolerance(tolerance: float, lever: float) -> float:
         """The tolerance solutions are verified at on our FK: ``tolerance`` less the FK rounding
-        margin (dhkin.ik.compiled.plan.FK_ROUNDING per metre of lever), as in the families, so
+        margin (dhkin.ik.core.FK_ROUNDING per metre of lever), as in the families, so
         that a solution verified on our FK is within ``tolerance`` on the oracle's too."""
-        from dhkin.ik.compiled.plan import FK_ROUNDING
+        from dhkin.ik.core import FK_ROUNDING
 
         return max(tolerance - FK_ROUNDING * lever, 0.5 * tolerance)
 
@@ -330,15 +330,14 @@ class General6RSolver:
     @functools.cached_property
     def _fast_kernel(self) -> Callable[..., int]:
         """:func:`dhkin.ik.compiled.general6r.solve_pose`'s compiled entry point for this
-        solver's argument types (numba's per-call type resolution skipped, as in the
-        families' :meth:`dhkin.ik.solver.ClosedFormSolver._entry_point`)."""
+        solver's argument types (numba's per-call type resolution skipped)."""
         from dhkin.ik.compiled.general6r import solve_pose
-        from dhkin.ik.solver import _compiled
+        from dhkin.ik.compiled.jit import entry_point
 
         args = (*self._data, self._base_inverse, self._tool_inverse, self.tip_chain,
                 np.eye(4), self._zero_seed, DEFAULT_TOLERANCE, 1.0, 1.0, self.table.lower,
                 self.table.upper, 1.0, *self._fast_buffers())
-        kernel: Callable[..., int] = _compiled(solve_pose, args, None)
+        kernel: Callable[..., int] = entry_point(solve_pose, args)
         return kernel
 
     def _solve(self, target: NDArray[np.float64], projection: float,

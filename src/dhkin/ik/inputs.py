@@ -58,18 +58,18 @@ def as_targets(T: ArrayLike) -> tuple[NDArray[np.float64], bool]:
 
 def pose_error_message(name: str, T: NDArray[np.float64], status: int) -> str:
     """The error message for a pose the kernels rejected with ``status``."""
-    from dhkin.ik.compiled import pose
+    from dhkin.ik import core
 
-    if status == pose.STATUS_NOT_FINITE:
+    if status == core.STATUS_NOT_FINITE:
         return f"{name}: expected finite numbers, got NaN or inf"
-    if status == pose.STATUS_BOTTOM_ROW:
+    if status == core.STATUS_BOTTOM_ROW:
         return (f"{name}: bottom row is {T[3].tolist()}, expected [0, 0, 0, 1] (within "
-                f"{pose.BOTTOM_ROW_TOLERANCE:g})")
+                f"{core.BOTTOM_ROW_TOLERANCE:g})")
     R = T[:3, :3]
     orthonormality = float(np.abs(R @ R.T - np.eye(3)).max())
     return (f"{name}: rotation block is not a rotation (|R R^T - I| = {orthonormality:.2e}, "
             f"det = {np.linalg.det(R):.3g}); expected |R R^T - I| <= "
-            f"{pose.ORTHONORMALITY_GATE:g} and det > 0 (a rotation rounded to a few digits)")
+            f"{core.ORTHONORMALITY_GATE:g} and det > 0 (a rotation rounded to a few digits)")
 
 
 def wrap_revolute(table: DHTable, q: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -7,7 +7,7 @@ axis 5 and meets it in the *wrist point*. Nothing else is assumed: joint offsets
 a1 != 0, a4 != 0, either DH convention, and zero or non-zero d5, d6 all work, because the solver
 works from the joint axes, not from one DH layout.
 
-Method (product of exponentials, compiled in :func:`dhkin.ik.compiled.offset.solve_offset_wrist`):
+Method (product of exponentials, compiled in ``cpp/dhkin/offset.hpp``):
 ``T = E1(q1) ... E6(q6) M`` with ``E_i`` the rotation by q_i about joint axis i at q = 0 (its
 direction multiplied by the joint's ``direction``) and ``M`` the DH flange at q = 0.
 
@@ -44,8 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
-from dhkin.ik.compiled.layout import pack
-from dhkin.ik.compiled.offset import GEOMETRY
+from dhkin.ik.core import OFFSET_WRIST, geometry_fields
 from dhkin.ik.geometry import (
     Condition,
     FactorArrays,
@@ -105,8 +104,6 @@ def _in_plane(x: NDArray[np.float64], normal: NDArray[np.float64]) -> NDArray[np
 
 def build(table: DHTable) -> Solved:
     """The compiled solver's geometry of a table of this family (its ideal model)."""
-    from dhkin.ik.compiled.pipeline import OFFSET_WRIST
-
     axes, home = zero_configuration(table)
     scale = table_scale(table)
     signed = [a.direction * j.direction for a, j in zip(axes, table.joints, strict=True)]
@@ -146,7 +143,7 @@ def build(table: DHTable) -> Solved:
         "spread": 0.0,
     }
     L2, L3 = values["upper_length"], values["forearm_length"]
-    return Solved(FAMILY, OFFSET_WRIST, pack(GEOMETRY, values), BRANCH_LABELS, FREE_JOINTS,
+    return Solved(FAMILY, OFFSET_WRIST, geometry_fields(values), BRANCH_LABELS, FREE_JOINTS,
                   (abs(L2 - L3), L2 + L3), scale)
 
 

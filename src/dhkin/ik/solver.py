@@ -1,7 +1,8 @@
-"""The closed-form IK of one robot: inputs checked, compiled pipeline called, results built.
+"""The closed-form IK of one robot: inputs checked, the compiled core called, results built.
 
-:class:`ClosedFormSolver` holds a table's family fit (:mod:`dhkin.ik.family`) and the constants
-of the compiled pipeline (:mod:`dhkin.ik.compiled.pipeline`, which documents every step). A
+:class:`ClosedFormSolver` holds a table's family fit (:mod:`dhkin.ik.family`) and the core's
+solver of its plan (:mod:`dhkin.ik.plan`; the pipeline's steps are documented in
+``cpp/dhkin/pipeline.hpp`` and ``cpp/dhkin/expand.hpp``). A
 :class:`~dhkin.robot.Robot` keeps one. Poses are base_link -> tool0 (or -> a TCP given as
 ``tcp``, tool0 -> TCP) in metres; joint values are URDF joint values (rad, m).
 
@@ -14,17 +15,17 @@ the seed (nearest 0 without one); ``copies=True`` lists every in-limit copy.
 
 from __future__ import annotations
 
-import functools
-import threading
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin import _core
 from dhkin.dh import DHTable
 from dhkin.errors import InputError
+from dhkin.ik.core import BRANCHES, STATUS_BAD_SEED, WHY_SIZE, pose_status, project
 from dhkin.ik.family import FamilyFit
 from dhkin.ik.inputs import (
     TWO_PI,
@@ -34,7 +35,7 @@ from dhkin.ik.inputs import (
     check_tolerance,
     pose_error_message,
 )
-from dhkin.ik.plan import _kernels, plan_array
+from dhkin.ik.plan import plan_fields
 from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions, flag_names
 from dhkin.ik.workers import _in_slices, check_workers
 from dhkin.tolerances import DEFAULT_TOLERANCE
@@ -48,32 +49,20 @@ DEFAULT_CHUNK = 65536
 STREAM_BYTES = 64 * 2**20
 
 
-#: :func:`dhkin.ik.compiled.direct.direct_one`'s count for a pose it leaves to the pipeline.
-_DEFER = -2
-
-
 #: Singularity flag names of each bit mask.
 _FLAG_SETS: tuple[frozenset[str], ...] = tuple(flag_names(bits) for bits in range(8))
 
 
-def _compiled(kernel: Any, args: tuple[Any, ...], family: int | None) -> Callable[..., Any]:
-    """The compiled entry point of a numba kernel for the types of ``args`` (compiled, or loaded
-    from the cache, now); callers then pass exactly those types and skip numba's per-call type
-    resolution. ``family``: a family id the kernel takes first, as a compile-time constant (the
-    direct path's kernels then contain that family's solver alone)."""
-    from numba import typeof
-    from numba.core import types
+class INFO:
+    """Columns of the per-pose info the core writes (cpp/dhkin/plan.hpp, ``PoseInfo``)."""
 
-    signature = tuple(typeof(arg) for arg in args)
-    if family is not None:
-        signature = (types.literal(family), *signature)
-    kernel.compile(signature)
-    return kernel.overloads[signature].entry_point
+    status, projection, candidates, verified, dropped, best_position, best_rotation = range(7)
+    size = 7
 
 
 class ClosedFormSolver:
     """The closed-form IK of one table (see the module docstring); safe to call from several
-    threads (the kernels release the GIL; single-pose buffers are per thread)."""
+    threads (the core releases the GIL and keeps no state between calls)."""
 
     def __init__(self, table: DHTable, fit: FamilyFit) -> None:
         self.table, self.fit = table, fit
@@ -82,11 +71,11 @@ class ClosedFormSolver:
         self.branch_labels: tuple[Mapping[str, str], ...] = tuple(
             MappingProxyType(dict(labels)) for labels in fit.solved.branch_labels)
         self.n_branches = len(self.branch_labels)
-        self.plan = plan_array(table, fit)
+        self.plan = plan_fields(table, fit)
         self._base_inverse = invert(table.base)
         self.frames = self.frames_for(None)
+        self.core = _core.ClosedForm(self.plan, self.frames)
         self._zero_seed = np.zeros(self.dof)
-        self._buffers = threading.local()
         self._configurations: dict[tuple[int, tuple[int, ...]], Configuration] = {}
         self._revolute = np.array([j.is_revolute for j in table.joints], dtype=float)
         spans = table.upper - table.lower
@@ -111,21 +100,12 @@ class ClosedFormSolver:
             if frame.shape != (4, 4) or not np.all(np.isfinite(frame)):
                 raise InputError(f"tcp: expected a finite (4, 4) transform tool0 -> TCP, "
                                  f"got shape {frame.shape}", field="tcp")
-            status = self._status(frame)
+            status = pose_status(frame)
             if status:
                 raise InputError(pose_error_message("tcp", frame, status))
-            projected = np.eye(4)
-            from dhkin.ik.compiled.pose import project
-
-            project(np.ascontiguousarray(frame), projected[:3])
+            projected, _ = project(frame)
             tool = tool @ projected
         return np.ascontiguousarray(np.stack([self._base_inverse, invert(tool)]))
-
-    @staticmethod
-    def _status(T: NDArray[np.float64]) -> int:
-        from dhkin.ik.compiled.pose import status
-
-        return int(status(np.ascontiguousarray(T, dtype=np.float64)))
 
     def _seeds(self, q_seed: ArrayLike | None, n_poses: int) -> NDArray[np.float64]:
         if q_seed is None:
@@ -145,9 +125,8 @@ class ClosedFormSolver:
         return seeds
 
     def _clamp(self, tolerance: float) -> float:
-        """The reach band of the kernels (dhkin.ik.compiled.pipeline, ``clamp``)."""
-        PLAN = _kernels().PLAN
-        return tolerance * (1.0 + float(self.plan[PLAN.lever])) + float(self.plan[PLAN.deviation])
+        """The reach band of the core (cpp/dhkin/plan.hpp, ``Plan::clamp``)."""
+        return tolerance * (1.0 + float(self.plan["lever"])) + float(self.plan["deviation"])
 
     # -- one pose -----------------------------------------------------------------------------
 
@@ -165,96 +144,25 @@ class ClosedFormSolver:
             raise InputError(f"T: expected a (4, 4) pose, got shape {np.shape(T)}", field="T")
         seed = self._zero_seed if q_seed is None else self._seeds(q_seed, 1)[0]
         frames = self.frames if tcp is None else self.frames_for(tcp)
-        try:
-            buffers = self._buffers.arrays
-        except AttributeError:
-            buffers = self._one_buffers()
-        out_q, out_branch, out_flags, out_errors, why, info, fwork, bwork, uwork, iwork = buffers
-        arguments = (self.plan, frames, target, seed, tolerance, copies, out_q, out_branch,
-                     out_flags, out_errors, why, info, fwork, bwork, uwork, iwork)
-        count = self._one_kernel(*arguments)
-        if count == _DEFER:
-            count = self._pipeline_kernel(*arguments)
-        INFO = _kernels().INFO
-        status = int(info[INFO.status])
+        q, branch, flags, residuals, info = self.core.solve_one(target, seed, tolerance, frames,
+                                                                copies)
+        status, projection, candidates, verified, dropped, best_position, best_rotation, why \
+            = info
         if status:
-            from dhkin.ik.compiled.pose import STATUS_BAD_SEED
-
             if status == STATUS_BAD_SEED:
                 raise InputError(field="q_seed", value=seed.tolist(),
                                  expected="finite values")
             raise InputError(pose_error_message("T", target, status))
-        if count < 0:  # cannot happen: max_solutions counts every copy
-            raise RuntimeError("IK expansion: more solutions than counted")
-        projection, dropped = float(info[INFO.projection]), int(info[INFO.dropped])
-        if count == 0:
-            return IKSolutions(q=np.zeros((0, self.dof)), family=self.family,
-                               reason=self._reason(info, why, tolerance),
-                               projection=projection, dropped=dropped)
-        q = out_q[:count].copy()
+        if len(q) == 0:
+            return IKSolutions(q=q, family=self.family, projection=projection, dropped=dropped,
+                               reason=self._reason(candidates, verified, best_position,
+                                                   best_rotation, why, tolerance))
         turns = (np.rint(q * (1.0 / TWO_PI)) * self._revolute).astype(np.int64).tolist()
-        configurations = tuple(map(self._configuration, out_branch[:count].tolist(),
-                                   map(tuple, turns)))
+        configurations = tuple(map(self._configuration, branch.tolist(), map(tuple, turns)))
         return IKSolutions(q=q, configurations=configurations,
-                           flags=tuple(_FLAG_SETS[f] for f in out_flags[:count].tolist()),
-                           residuals=out_errors[:count].copy(), family=self.family,
-                           projection=projection, dropped=dropped)
-
-    def _one_buffers(self) -> tuple[NDArray[Any], ...]:
-        kernels = _kernels()
-        floats, bools, uints, ints = kernels.work_sizes(self.dof)
-        rows = self.max_solutions
-        arrays = (np.empty((rows, self.dof)), np.empty(rows, np.int16), np.empty(rows, np.uint8),
-                  np.empty((rows, 2)), np.empty(kernels.WHY_SIZE), np.empty(kernels.INFO.size),
-                  np.empty(floats), np.empty(bools, np.bool_), np.empty(uints, np.uint8),
-                  np.empty(ints, np.int64))
-        self._buffers.arrays = arrays
-        return arrays
-
-    @functools.cached_property
-    def _one_kernel(self) -> Callable[..., int]:
-        """The direct path's single-pose kernel for this table's family
-        (:func:`dhkin.ik.compiled.direct.direct_one`, the family bound in): see
-        :meth:`_entry_point`."""
-        from dhkin.ik.compiled import direct
-
-        kernel = self._entry_point(direct.direct_one, self._family_id)
-        family = self._family_id
-        return lambda *args: kernel(family, *args)
-
-    @functools.cached_property
-    def _pipeline_kernel(self) -> Callable[..., int]:
-        """The pipeline's single-pose kernel (:func:`dhkin.ik.compiled.pipeline.solve_one`), for
-        the poses the direct path leaves to it: compiled when a pose first needs it."""
-        return self._entry_point(_kernels().solve_one)
-
-    @functools.cached_property
-    def _family_id(self) -> int:
-        return int(self.plan[_kernels().PLAN.family])
-
-    def _entry_point(self, kernel: Any, family: int | None = None) -> Callable[..., int]:
-        """A single-pose kernel's compiled entry point for this solver's arguments (see
-        :func:`_compiled`); ``family``: the family id the direct path's kernels take first."""
-        args = (self.plan, self.frames, np.zeros((4, 4)), self._zero_seed, DEFAULT_TOLERANCE,
-                False, *self._one_buffers())
-        return _compiled(kernel, args, family)
-
-    @functools.cached_property
-    def _direct_batch(self) -> Callable[..., int]:
-        """The direct path's batch kernel for this table's family
-        (:func:`dhkin.ik.compiled.direct.direct_batch`, the family bound in)."""
-        from dhkin.ik.compiled import direct
-
-        kernels = _kernels()
-        B, n = self.n_branches, self.dof
-        args = (self.plan, self.frames, np.zeros((1, 4, 4)), np.zeros((1, n)), DEFAULT_TOLERANCE,
-                False, np.empty((1, B, n)), np.empty((1, B), np.bool_),
-                np.empty((1, B), np.uint8), np.empty((1, B, 2)), np.empty((1, B), np.int64),
-                np.empty((1, kernels.WHY_SIZE)), np.empty((1, kernels.INFO.size)),
-                np.empty(1, np.bool_))
-        kernel = _compiled(direct.direct_batch, args, self._family_id)
-        family = self._family_id
-        return lambda *args: kernel(family, *args)
+                           flags=tuple(_FLAG_SETS[f] for f in flags.tolist()),
+                           residuals=residuals, family=self.family, projection=projection,
+                           dropped=dropped)
 
     def _configuration(self, branch: int, turns: tuple[int, ...]) -> Configuration:
         """The (shared) Configuration of a branch and its turns."""
@@ -267,18 +175,16 @@ class ClosedFormSolver:
             self._configurations[key] = found
         return found
 
-    def _reason(self, info: NDArray[np.float64], why: NDArray[np.float64],
-                tolerance: float) -> str:
-        """Why one pose has no solution, from the kernel's counts and numbers: always true."""
-        INFO = _kernels().INFO
-        candidates, verified = int(info[INFO.candidates]), int(info[INFO.verified])
+    def _reason(self, candidates: int, verified: int, best_position: float,
+                best_rotation: float, why: NDArray[np.float64], tolerance: float) -> str:
+        """Why one pose has no solution, from the core's counts and numbers: always true."""
         if candidates == 0:
             return (self.fit.explain(why, self._clamp(tolerance))
                     or "no branch of the closed form has a solution for this pose")
         if verified == 0:
             return (f"{candidates} branch solution(s) of the closed form did not verify on the "
                     f"exact chain at tolerance {tolerance:g} (closest: "
-                    f"{info[INFO.best_position]:.3g} m, {info[INFO.best_rotation]:.3g} rad)")
+                    f"{best_position:.3g} m, {best_rotation:.3g} rad)")
         return (f"{verified} branch solution(s) verified, but no 2pi copy of any lies within "
                 f"the joint limits")
 
@@ -308,7 +214,6 @@ class ClosedFormSolver:
         (step 4) straight into the result. Without copies the result is B wide (then trimmed to
         the widest pose); with every copy each chunk is expanded into its own arrays and the
         chunks are joined at the end. Memory: the result and one chunk's work."""
-        kernels = _kernels()
         N = targets.shape[0]
         chunks: list[tuple[int, int, Any]] = []
         projection = np.empty(N)
@@ -321,8 +226,8 @@ class ClosedFormSolver:
             principal = self._principal(targets[start:stop], part, tolerance, frames, copies,
                                         first_index + start, workers)
             totals, info = principal[4:]
-            projection[start:stop] = info[:, kernels.INFO.projection]
-            dropped[start:stop] = info[:, kernels.INFO.dropped]
+            projection[start:stop] = info[:, INFO.projection]
+            dropped[start:stop] = info[:, INFO.dropped]
             chunk_width = int(totals.sum(axis=1).max()) if stop > start else 0
             target = (self._batch_arrays(stop - start, chunk_width) if copies
                       else tuple(a[start:stop] for a in out))  # type: ignore[union-attr]
@@ -332,10 +237,9 @@ class ClosedFormSolver:
                        part: NDArray[np.float64] = part, principal: tuple[Any, ...] = principal,
                        target: tuple[Any, ...] = target) -> None:
                 q, ok, flags, errors = principal[:4]
-                kernels.expand_batch(self.plan, frames, chunk_targets[a:b],
-                                     part if part.shape[0] == 1 else part[a:b], tolerance,
-                                     copies, q[a:b], ok[a:b], flags[a:b], errors[a:b],
-                                     *(array[a:b] for array in target))
+                self.core.expand(chunk_targets[a:b], part if part.shape[0] == 1 else part[a:b],
+                                 tolerance, frames, copies, q[a:b], ok[a:b], flags[a:b],
+                                 errors[a:b], *(array[a:b] for array in target))
 
             _in_slices(stop - start, workers, expand)
             width = max(width, int(target[1].sum(axis=1).max()) if stop > start else 0)
@@ -365,43 +269,21 @@ class ClosedFormSolver:
     def _principal(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                    tolerance: float, frames: NDArray[np.float64], copies: bool,
                    first_index: int, workers: int = 1) -> tuple[NDArray[Any], ...]:
-        """Steps 1-3 for checked poses: q, ok, flags, errors, totals, info (see
-        dhkin.ik.compiled.pipeline.solve_batch), in contiguous slices on up to ``workers``
-        threads; a rejected pose raises InputError (its ``index`` the pose's)."""
-        kernels = _kernels()
-        N, B, n = targets.shape[0], self.n_branches, self.dof
-        q = np.empty((N, B, n))
-        ok = np.empty((N, B), np.bool_)
-        flags = np.empty((N, B), np.uint8)
-        errors = np.empty((N, B, 2))
-        totals = np.empty((N, B), np.int64)
-        why = np.empty((N, kernels.WHY_SIZE))
-        info = np.empty((N, kernels.INFO.size))
+        """Steps 1-3 for checked poses: q, ok, flags, errors, totals, info (the core's
+        ``principal``), in contiguous slices on up to ``workers`` threads; a rejected pose
+        raises InputError (its ``index`` the pose's)."""
+        N, B, n = targets.shape[0], BRANCHES, self.dof
+        outputs: tuple[NDArray[Any], ...] = (
+            np.empty((N, B, n)), np.empty((N, B), np.bool_), np.empty((N, B), np.uint8),
+            np.empty((N, B, 2)), np.empty((N, B), np.int64), np.empty((N, WHY_SIZE)),
+            np.empty((N, INFO.size)))
 
-        done = np.empty(N, np.bool_)
-        outputs: tuple[NDArray[Any], ...] = (q, ok, flags, errors, totals, why, info)
-        direct_batch = self._direct_batch
+        def solve(a: int, b: int) -> None:
+            self.core.principal(targets[a:b], seeds if seeds.shape[0] == 1 else seeds[a:b],
+                                tolerance, frames, copies, *(array[a:b] for array in outputs))
 
-        def solve_direct(a: int, b: int) -> None:
-            direct_batch(self.plan, frames, targets[a:b],
-                         seeds if seeds.shape[0] == 1 else seeds[a:b], tolerance, copies,
-                         *(array[a:b] for array in outputs), done[a:b])
-
-        _in_slices(N, workers, solve_direct)
-        rest = np.flatnonzero(~done)
-        if rest.size:  # the poses the direct path declined: the pipeline answers them
-            rest_targets = targets[rest]
-            rest_seeds = seeds if seeds.shape[0] == 1 else seeds[rest]
-            answers = tuple(array[rest] for array in outputs)
-
-            def solve(a: int, b: int) -> None:
-                kernels.solve_batch(self.plan, frames, rest_targets[a:b],
-                                    rest_seeds if rest_seeds.shape[0] == 1 else rest_seeds[a:b],
-                                    tolerance, copies, *(array[a:b] for array in answers))
-
-            _in_slices(rest.size, workers, solve)
-            for whole, answered in zip(outputs, answers, strict=True):
-                whole[rest] = answered
+        _in_slices(N, workers, solve)
+        q, ok, flags, errors, totals, _, info = outputs
         self._raise_rejected(targets, info, first_index)
         return q, ok, flags, errors, totals, info
 
@@ -415,23 +297,18 @@ class ClosedFormSolver:
         targets, _ = as_targets(T)
         seeds = self._seeds(q_seed, targets.shape[0])
         frames = self.frames if tcp is None else self.frames_for(tcp)
-        kernels = _kernels()
         q, ok, flags, errors, _, info = self._principal(targets, seeds, tolerance, frames, False,
                                                         0)
         q[~ok] = 0.0
         errors[~ok] = 0.0
-        INFO = kernels.INFO
         return BranchSolutions(q=q, valid=ok, flags=np.where(ok, flags, 0).astype(np.uint8),
                                residuals=errors, branch_labels=self.branch_labels,
                                dropped=info[:, INFO.dropped].astype(np.int64))
 
     def _raise_rejected(self, targets: NDArray[np.float64], info: NDArray[np.float64],
                         start: int) -> None:
-        INFO = _kernels().INFO
         bad = np.flatnonzero(info[:, INFO.status])
         if bad.size:
-            from dhkin.ik.compiled.pose import STATUS_BAD_SEED
-
             index = int(bad[0])
             status = int(info[index, INFO.status])
             if status == STATUS_BAD_SEED:

@@ -8,7 +8,7 @@ arm plane along axis 2), any upper arm, elbow offset (a3) and forearm (d4); any
 joint offsets and directions, standard or modified DH, any base and tool transform.
 
 This module reads the geometry of a table (its ideal model, see :mod:`dhkin.ik.family`) for the
-compiled solver :func:`dhkin.ik.compiled.spherical.solve_spherical_wrist`, names the branches and
+compiled solver (``cpp/dhkin/spherical.hpp``), names the branches and
 explains targets without a solution. How the solver works (everything in DH frame 0):
 
 * **Geometry, not layout.** The joint axes at q = 0 (product of exponentials: ``T(q) = E1(q1)
@@ -24,7 +24,7 @@ explains targets without a solution. How the solver works (everything in DH fram
   ``(q4 + pi, -q5, q6 + pi)`` is the flip). q6 comes from the remainder ``Ry(-theta) Rz(-alpha)
   H``, so the pose stays exact even where q4 alone is ill-conditioned.
 
-Free joints (taken from the seed where that verifies, see :mod:`dhkin.ik.compiled.pipeline`): q4
+Free joints (taken from the seed where that verifies, see :mod:`dhkin.ik.solver`): q4
 at the wrist singularity (axes 4 and 6 parallel: only q4 +- q6 is fixed), q1 with the wrist
 centre on axis 1 (b = 0), q2 with the wrist centre on axis 2 (equal upper arm and forearm,
 folded).
@@ -51,8 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.dh import DHTable
-from dhkin.ik.compiled.layout import pack
-from dhkin.ik.compiled.spherical import GEOMETRY
+from dhkin.ik.core import SPHERICAL_WRIST, geometry_fields
 from dhkin.ik.geometry import (
     Condition,
     FactorArrays,
@@ -182,7 +181,8 @@ def frame_one_x_point(table: DHTable, axes: Sequence[JointAxis]) -> Vector:
 
 def shoulder_wrist_values(shoulder: Shoulder, wrist: Wrist, flange_zero: NDArray[np.float64],
                           signs: Sequence[float], scale: float) -> dict[str, ArrayLike]:
-    """The shoulder and wrist fields of the compiled geometry (layout GEOMETRY)."""
+    """The shoulder and wrist fields of the compiled geometry (``SphericalGeometry``,
+    cpp/dhkin/spherical.hpp)."""
     c, s = np.cos(wrist.tilt), np.sin(wrist.tilt)
     tilt_back = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
     return {
@@ -213,8 +213,8 @@ class Solved:
     """What the pipeline needs of a family on one (ideal) table."""
 
     family: str
-    kernel: int
-    geometry: NDArray[np.float64]
+    kernel: int                                 # the core's family id (dhkin.ik.core)
+    geometry: Mapping[str, NDArray[np.float64]]  # named values (dhkin.ik.core.geometry_fields)
     branch_labels: tuple[Mapping[str, str], ...]
     free_joints: tuple[int, int, int]
     reach: tuple[float, float]   # the arm's smallest and largest reach (m), for explanations
@@ -224,8 +224,6 @@ class Solved:
 def build(table: DHTable) -> Solved:
     """The compiled solver's geometry and the branch labels of a table of this family (its
     ideal model: the structure must hold exactly)."""
-    from dhkin.ik.compiled.pipeline import SPHERICAL_WRIST
-
     axes, flange_zero = zero_configuration(table)
     scale = table_scale(table)
     wrist = make_wrist(table, axes, flange_zero)
@@ -256,7 +254,7 @@ def build(table: DHTable) -> Solved:
                 labels.append({"shoulder": shoulder_label(front), "elbow": elbow,
                                "wrist": wrist_label(front, q5_positive)})
     reach = (abs(abs(upper_arm) - abs(forearm)), abs(upper_arm) + abs(forearm))
-    return Solved(FAMILY, SPHERICAL_WRIST, pack(GEOMETRY, values), tuple(labels), FREE_JOINTS,
+    return Solved(FAMILY, SPHERICAL_WRIST, geometry_fields(values), tuple(labels), FREE_JOINTS,
                   reach, scale)
 
 

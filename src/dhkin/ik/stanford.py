@@ -12,7 +12,7 @@ the slide direction, t = direction_3 * q3), so ``|A + t V| = |target|`` gives
 ``t = -A.V +- sqrt(|target|^2 - e^2)`` with e the distance of the slide line from axis 2: two
 slide branches, "forward" (+) and "backward" (-). With Spong's frames (the built-in
 ``stanford_arm``) A = 0 and e = 0, so t = +-|target| and only "forward" fits a positive stroke.
-Compiled solver: :func:`dhkin.ik.compiled.spherical.solve_stanford`.
+Compiled solver: ``solve_stanford`` in cpp/dhkin/spherical.hpp.
 
 Labels: shoulder lefty/righty and wrist noflip/flip as in the spherical-wrist family, slide
 forward/backward. Free joints: q4 at the wrist singularity, q1 with the wrist centre on axis 1,
@@ -32,8 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.dh import DHTable
-from dhkin.ik.compiled.layout import pack
-from dhkin.ik.compiled.spherical import GEOMETRY
+from dhkin.ik.core import STANFORD, geometry_fields
 from dhkin.ik.geometry import (
     Condition,
     FactorArrays,
@@ -81,8 +80,6 @@ def structure(table: DHTable) -> tuple[list[str], list[Condition]]:
 
 def build(table: DHTable) -> Solved:
     """The compiled solver's geometry and the branch labels of a table of this family."""
-    from dhkin.ik.compiled.pipeline import STANFORD
-
     axes, flange_zero = zero_configuration(table)
     scale = table_scale(table)
     wrist = make_wrist(table, axes, flange_zero)
@@ -116,7 +113,7 @@ def build(table: DHTable) -> Solved:
                 labels.append({"shoulder": shoulder_label(front), "slide": slide_label,
                                "wrist": wrist_label(front, q5_positive)})
     offset = abs(along_and_offset.imag)
-    return Solved(FAMILY, STANFORD, pack(GEOMETRY, values), tuple(labels), FREE_JOINTS,
+    return Solved(FAMILY, STANFORD, geometry_fields(values), tuple(labels), FREE_JOINTS,
                   (offset, np.inf), scale)
 
 

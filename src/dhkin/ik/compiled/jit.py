@@ -59,3 +59,14 @@ jit_fma = _compiler(cache=CACHE, error_model="numpy", nogil=True, fastmath={"con
 #: costs little to compile and runs faster (the offset-wrist solver's screw motions: the UR5's
 #: batch rate was 6 % lower without it).
 jit_literal = njit(cache=CACHE, error_model="numpy", nogil=True)
+
+
+def entry_point(kernel: Any, args: tuple[Any, ...]) -> Callable[..., Any]:
+    """The compiled entry point of a numba kernel for the types of ``args`` (compiled, or loaded
+    from the cache, now); callers then pass exactly those types and skip numba's per-call type
+    resolution."""
+    from numba import typeof
+
+    signature = tuple(typeof(arg) for arg in args)
+    kernel.compile(signature)
+    return kernel.overloads[signature].entry_point

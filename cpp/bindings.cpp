@@ -1,0 +1,541 @@
+// dhkin._core: the Python module of the compiled core (nanobind).
+//
+// Arrays in, arrays out. Plans are built once per table from named values (dhkin.ik.plan); the
+// per-pose functions take C-contiguous float64 arrays (converted when given otherwise) and write
+// into arrays the caller allocated, releasing the GIL, so that Python threads can share a batch.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "dhkin/chain.hpp"
+#include "dhkin/expand.hpp"
+#include "dhkin/pipeline.hpp"
+#include "dhkin/plan.hpp"
+#include "dhkin/pose.hpp"
+#include "dhkin/solver.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace {
+
+using dhkin::Frame;
+using dhkin::Joints;
+using dhkin::kBranches;
+using dhkin::kDof;
+
+template <class T, class... Shape>
+using Input = nb::ndarray<const T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
+template <class T, class... Shape>
+using Output = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
+
+// ---- reading named values (a plan's fields come as a dict of arrays) -------------------------
+
+std::vector<double> values_of(const nb::dict& fields, const char* name, std::size_t size) {
+  if (!fields.contains(name)) throw std::invalid_argument(std::string("missing field ") + name);
+  const auto array = nb::cast<Input<double>>(fields[name]);
+  if (array.size() != size) {
+    throw std::invalid_argument(std::string("field ") + name + ": expected " +
+                                std::to_string(size) + " values, got " +
+                                std::to_string(array.size()));
+  }
+  return std::vector<double>(array.data(), array.data() + size);
+}
+
+double scalar(const nb::dict& f, const char* name) { return values_of(f, name, 1)[0]; }
+
+dhkin::Vec3 vec3(const nb::dict& f, const char* name) {
+  const auto v = values_of(f, name, 3);
+  return {v[0], v[1], v[2]};
+}
+
+dhkin::Mat3 mat3(const nb::dict& f, const char* name) {
+  const auto v = values_of(f, name, 9);
+  dhkin::Mat3 m;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m.m[r][c] = v[3 * r + c];
+  }
+  return m;
+}
+
+dhkin::Planar planar(const nb::dict& f, const char* name) {
+  const auto v = values_of(f, name, 2);
+  return {v[0], v[1]};
+}
+
+Frame frame_from(const double* rows) {  // the top 3 rows of a 4 x 4 (or a 3 x 4) row-major
+  Frame out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out.R[r][c] = rows[4 * r + c];
+    out.p[r] = rows[4 * r + 3];
+  }
+  return out;
+}
+
+Frame frame(const nb::dict& f, const char* name) {
+  const auto v = values_of(f, name, 12);
+  return frame_from(v.data());
+}
+
+// Every key of `fields` must be one of `names`.
+void check_keys(const nb::dict& fields, std::initializer_list<const char*> names,
+                const char* what) {
+  for (auto item : fields) {
+    const std::string key = nb::cast<std::string>(item.first);
+    bool found = false;
+    for (const char* name : names) found = found || key == name;
+    if (!found) throw std::invalid_argument(std::string(what) + ": unknown field " + key);
+  }
+}
+
+dhkin::SphericalGeometry spherical_geometry(const nb::dict& f) {
+  check_keys(f, {"centre_in_flange", "origin", "forward", "lateral", "up", "shoulder_offset",
+                 "lateral_offset", "signs", "wrist_frame", "target_to_wrist", "tilt",
+                 "wrist_directions", "scale", "upper_arm", "forearm", "upper_length",
+                 "forearm_length", "bend_at_zero", "wrist_at_zero", "slide", "slide_along",
+                 "slide_offset", "spread"},
+             "spherical geometry");
+  dhkin::SphericalGeometry g;
+  g.centre_in_flange = vec3(f, "centre_in_flange");
+  g.origin = vec3(f, "origin");
+  g.forward = vec3(f, "forward");
+  g.lateral = vec3(f, "lateral");
+  g.up = vec3(f, "up");
+  g.shoulder_offset = scalar(f, "shoulder_offset");
+  g.lateral_offset = scalar(f, "lateral_offset");
+  const auto signs = values_of(f, "signs", 3);
+  const auto directions = values_of(f, "wrist_directions", 3);
+  for (int k = 0; k < 3; ++k) g.signs[k] = signs[k], g.wrist_directions[k] = directions[k];
+  g.wrist_frame = mat3(f, "wrist_frame");
+  g.target_to_wrist = mat3(f, "target_to_wrist");
+  g.tilt = scalar(f, "tilt");
+  g.scale = scalar(f, "scale");
+  g.upper_arm = planar(f, "upper_arm");
+  g.forearm = planar(f, "forearm");
+  g.upper_length = scalar(f, "upper_length");
+  g.forearm_length = scalar(f, "forearm_length");
+  g.bend_at_zero = scalar(f, "bend_at_zero");
+  g.wrist_at_zero = planar(f, "wrist_at_zero");
+  g.slide = planar(f, "slide");
+  g.slide_along = scalar(f, "slide_along");
+  g.slide_offset = scalar(f, "slide_offset");
+  g.spread = scalar(f, "spread");
+  return g;
+}
+
+dhkin::OffsetGeometry offset_geometry(const nb::dict& f) {
+  check_keys(f, {"directions", "points", "n", "side", "plane_x", "plane_y", "wrist_in_flange",
+                 "wrist_point", "home_rotation", "home_inverse", "upper_arm", "forearm",
+                 "axis3_x_forearm", "lateral", "left_sign", "lateral_sign", "up_sign", "psi",
+                 "sign3", "sign4", "upper_length", "forearm_length", "elbow_alpha", "elbow_base",
+                 "elbow_turn", "scale", "spread"},
+             "offset geometry");
+  dhkin::OffsetGeometry g;
+  const auto directions = values_of(f, "directions", 18);
+  const auto points = values_of(f, "points", 18);
+  for (int j = 0; j < 6; ++j) {
+    g.directions[j] = {directions[3 * j], directions[3 * j + 1], directions[3 * j + 2]};
+    g.points[j] = {points[3 * j], points[3 * j + 1], points[3 * j + 2]};
+  }
+  g.n = vec3(f, "n");
+  g.side = vec3(f, "side");
+  g.plane_x = vec3(f, "plane_x");
+  g.plane_y = vec3(f, "plane_y");
+  g.wrist_in_flange = vec3(f, "wrist_in_flange");
+  g.wrist_point = vec3(f, "wrist_point");
+  g.home_rotation = mat3(f, "home_rotation");
+  g.home_inverse = frame(f, "home_inverse");
+  g.upper_arm = vec3(f, "upper_arm");
+  g.forearm = vec3(f, "forearm");
+  g.axis3_x_forearm = vec3(f, "axis3_x_forearm");
+  g.lateral = scalar(f, "lateral");
+  g.left_sign = scalar(f, "left_sign");
+  g.lateral_sign = scalar(f, "lateral_sign");
+  g.up_sign = scalar(f, "up_sign");
+  g.psi = scalar(f, "psi");
+  g.sign3 = scalar(f, "sign3");
+  g.sign4 = scalar(f, "sign4");
+  g.upper_length = scalar(f, "upper_length");
+  g.forearm_length = scalar(f, "forearm_length");
+  g.elbow_alpha = scalar(f, "elbow_alpha");
+  g.elbow_base = scalar(f, "elbow_base");
+  g.elbow_turn = scalar(f, "elbow_turn");
+  g.scale = scalar(f, "scale");
+  g.spread = scalar(f, "spread");
+  return g;
+}
+
+// A chain from its parts: before (n, 4, 4), revolute (n,), direction (n,), offset (n,), tail (4, 4).
+dhkin::Chain make_chain(Input<double, nb::shape<-1, 4, 4>> before, Input<bool, nb::ndim<1>> revolute,
+                        Input<double, nb::ndim<1>> direction, Input<double, nb::ndim<1>> offset,
+                        Input<double, nb::shape<4, 4>> tail) {
+  const std::size_t n = before.shape(0);
+  if (revolute.shape(0) != n || direction.shape(0) != n || offset.shape(0) != n) {
+    throw std::invalid_argument("chain: before, revolute, direction and offset differ in length");
+  }
+  if (n < 1 || n > static_cast<std::size_t>(dhkin::kMaxJoints)) {
+    throw std::invalid_argument("chain: expected 1 to 32 joints");
+  }
+  dhkin::Chain chain;
+  chain.joints.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    chain.joints[j].before = frame_from(before.data() + 16 * j);
+    chain.joints[j].revolute = revolute(j);
+    chain.joints[j].direction = direction(j);
+    chain.joints[j].offset = offset(j);
+  }
+  chain.tail = frame_from(tail.data());
+  return chain;
+}
+
+dhkin::Chain chain_of(const nb::dict& f, const char* name) {
+  if (!f.contains(name)) throw std::invalid_argument(std::string("missing field ") + name);
+  const nb::dict parts = nb::cast<nb::dict>(f[name]);
+  check_keys(parts, {"before", "revolute", "direction", "offset", "tail"}, name);
+  return make_chain(nb::cast<Input<double, nb::shape<-1, 4, 4>>>(parts["before"]),
+                    nb::cast<Input<bool, nb::ndim<1>>>(parts["revolute"]),
+                    nb::cast<Input<double, nb::ndim<1>>>(parts["direction"]),
+                    nb::cast<Input<double, nb::ndim<1>>>(parts["offset"]),
+                    nb::cast<Input<double, nb::shape<4, 4>>>(parts["tail"]));
+}
+
+dhkin::Plan make_plan(const nb::dict& f) {
+  check_keys(f, {"family", "refine", "seed_angle", "seed_length", "deviation", "lever",
+                 "free_joints", "geometry", "chain", "ideal", "path", "limits"},
+             "plan");
+  dhkin::Plan plan;
+  const int family = nb::cast<int>(f["family"]);
+  if (family < 1 || family > 3) throw std::invalid_argument("plan: unknown family id");
+  plan.family = static_cast<dhkin::Family>(family);
+  plan.refine = nb::cast<bool>(f["refine"]);
+  plan.seed_angle = nb::cast<double>(f["seed_angle"]);
+  plan.seed_length = nb::cast<double>(f["seed_length"]);
+  plan.deviation = nb::cast<double>(f["deviation"]);
+  plan.lever = nb::cast<double>(f["lever"]);
+  const auto free = nb::cast<std::tuple<int, int, int>>(f["free_joints"]);
+  plan.free_wrist = std::get<0>(free);
+  plan.free_elbow = std::get<1>(free);
+  plan.free_shoulder = std::get<2>(free);
+  const nb::dict geometry = nb::cast<nb::dict>(f["geometry"]);
+  if (plan.family == dhkin::Family::offset_wrist) {
+    plan.offset = offset_geometry(geometry);
+  } else {
+    plan.spherical = spherical_geometry(geometry);
+  }
+  plan.chain = chain_of(f, "chain");
+  plan.ideal = chain_of(f, "ideal");
+  if (plan.chain.dof() != kDof || plan.ideal.dof() != kDof) {
+    throw std::invalid_argument("plan: the closed-form families have 6 joints");
+  }
+  const auto path = values_of(f, "path", 6 * (kDof + 1));
+  for (int j = 0; j <= kDof; ++j) {
+    plan.path.push_back({{path[6 * j], path[6 * j + 1], path[6 * j + 2]},
+                         {path[6 * j + 3], path[6 * j + 4], path[6 * j + 5]}});
+  }
+  const auto limits = values_of(f, "limits", 2 * kDof);
+  for (int j = 0; j < kDof; ++j) plan.limits[j] = {limits[2 * j], limits[2 * j + 1]};
+  return plan;
+}
+
+dhkin::TargetFrames target_frames(const Input<double, nb::shape<2, 4, 4>>& frames) {
+  return dhkin::TargetFrames::from(frame_from(frames.data()), frame_from(frames.data() + 16));
+}
+
+Joints joints_of(const double* values) {
+  Joints q;
+  for (int j = 0; j < kDof; ++j) q[j] = values[j];
+  return q;
+}
+
+// A new numpy array owning its data.
+template <class T>
+Output<T> new_array(std::initializer_list<std::size_t> shape) {
+  std::size_t size = 1;
+  for (std::size_t s : shape) size *= s;
+  T* data = new T[size > 0 ? size : 1]();
+  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
+  return Output<T>(data, shape.size(), shape.begin(), owner);
+}
+
+// The per-pose info as the tuple dhkin.ik.solver reads: (status, projection, candidates,
+// verified, dropped, best_position, best_rotation, why).
+nb::tuple info_tuple(const dhkin::PoseInfo& info) {
+  auto why = new_array<double>({dhkin::kWhySize});
+  for (int k = 0; k < dhkin::kWhySize; ++k) why.data()[k] = info.why[k];
+  return nb::make_tuple(info.status, info.projection, info.candidates, info.verified,
+                        info.dropped, info.best_position, info.best_rotation, why);
+}
+
+class ClosedForm {
+ public:
+  ClosedForm(const nb::dict& plan, Input<double, nb::shape<2, 4, 4>> frames)
+      : solver_(make_plan(plan), target_frames(frames)) {}
+
+  // One pose: (q (k, 6), branch (k,), flags (k,), errors (k, 2), info tuple).
+  nb::tuple solve_one(Input<double, nb::shape<4, 4>> T, Input<double, nb::shape<kDof>> seed,
+                      double tolerance, Input<double, nb::shape<2, 4, 4>> frames, bool copies) {
+    const dhkin::TargetFrames targets = target_frames(frames);
+    dhkin::Plan storage;
+    const dhkin::Plan& plan = solver_.plan_for(targets, storage);
+    const Joints seed_q = joints_of(seed.data());
+    dhkin::Branches branches;
+    dhkin::PoseInfo info;
+    std::vector<dhkin::Solution> solutions;
+    {
+      nb::gil_scoped_release release;
+      dhkin::solve_pose(plan, targets, T.data(), seed_q, tolerance, branches, info);
+      if (info.status == dhkin::kUsable) {
+        dhkin::expand(plan, targets, T.data(), seed_q, tolerance, copies, branches,
+                      [&](const dhkin::Solution& s) {
+                        solutions.push_back(s);
+                        return true;
+                      });
+      }
+    }
+    const std::size_t k = solutions.size();
+    auto q = new_array<double>({k, static_cast<std::size_t>(kDof)});
+    auto branch = new_array<std::int16_t>({k});
+    auto flags = new_array<std::uint8_t>({k});
+    auto errors = new_array<double>({k, 2});
+    for (std::size_t i = 0; i < k; ++i) {
+      for (int j = 0; j < kDof; ++j) q.data()[kDof * i + j] = solutions[i].q[j];
+      branch.data()[i] = static_cast<std::int16_t>(solutions[i].branch);
+      flags.data()[i] = solutions[i].flags;
+      errors.data()[2 * i] = solutions[i].error.position;
+      errors.data()[2 * i + 1] = solutions[i].error.rotation;
+    }
+    return nb::make_tuple(q, branch, flags, errors, info_tuple(info));
+  }
+
+  // Steps 1-3 of N poses into q (N, 8, 6), ok, flags (N, 8), errors (N, 8, 2), totals (N, 8)
+  // (solutions step 4 can give per branch), why (N, 6) and info (N, 7: status, projection,
+  // candidates, verified, dropped, best position, best rotation). Seeds: (N, 6) or (1, 6).
+  // `direct` false skips the direct path (every pose through the full pipeline: for tests).
+  void principal(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
+                 double tolerance, Input<double, nb::shape<2, 4, 4>> frames, bool copies,
+                 Output<double, nb::shape<-1, kBranches, kDof>> q,
+                 Output<bool, nb::shape<-1, kBranches>> ok,
+                 Output<std::uint8_t, nb::shape<-1, kBranches>> flags,
+                 Output<double, nb::shape<-1, kBranches, 2>> errors,
+                 Output<std::int64_t, nb::shape<-1, kBranches>> totals,
+                 Output<double, nb::shape<-1, dhkin::kWhySize>> why,
+                 Output<double, nb::shape<-1, 7>> info, bool direct) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {q.shape(0), ok.shape(0), flags.shape(0), errors.shape(0),
+                                   totals.shape(0), why.shape(0), info.shape(0)});
+    const dhkin::TargetFrames target = target_frames(frames);
+    dhkin::Plan storage;
+    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    nb::gil_scoped_release release;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Joints seed = joints_of(seeds.data() + kDof * (seeds.shape(0) == 1 ? 0 : i));
+      dhkin::Branches branches;
+      dhkin::PoseInfo pose;
+      if (direct) {
+        dhkin::solve_pose(plan, target, targets.data() + 16 * i, seed, tolerance, branches, pose);
+      } else {
+        dhkin::solve_branches(plan, target, targets.data() + 16 * i, seed, tolerance, branches,
+                              pose);
+      }
+      const auto counts = dhkin::copy_totals(plan, branches, tolerance, copies);
+      for (int b = 0; b < kBranches; ++b) {
+        for (int j = 0; j < kDof; ++j) q(i, b, j) = branches.q[b][j];
+        ok(i, b) = branches.ok[b];
+        flags(i, b) = branches.flags[b];
+        errors(i, b, 0) = branches.errors[b].position;
+        errors(i, b, 1) = branches.errors[b].rotation;
+        totals(i, b) = counts[b];
+      }
+      for (int k = 0; k < dhkin::kWhySize; ++k) why(i, k) = pose.why[k];
+      write_info(pose, &info(i, 0));
+    }
+  }
+
+  // Whether the direct path answers each of N poses (the rest take the full pipeline); with
+  // `direct` false, principal() skips the direct path (tests compare the two answers).
+  void direct_answers(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
+                      double tolerance, Input<double, nb::shape<2, 4, 4>> frames,
+                      Output<bool, nb::ndim<1>> answered) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {answered.shape(0)});
+    const dhkin::TargetFrames target = target_frames(frames);
+    dhkin::Plan storage;
+    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    nb::gil_scoped_release release;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Joints seed = joints_of(seeds.data() + kDof * (seeds.shape(0) == 1 ? 0 : i));
+      dhkin::Branches branches;
+      dhkin::PoseInfo pose;
+      answered(i) = dhkin::direct_branches(plan, target, targets.data() + 16 * i, seed, tolerance,
+                                           branches, pose);
+    }
+  }
+
+  // Step 4 of N poses from principal()'s outputs into out_q (N, M, 6), out_valid, out_branch,
+  // out_flags (N, M) and out_errors (N, M, 2); M must hold every pose's solutions.
+  void expand(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
+              double tolerance, Input<double, nb::shape<2, 4, 4>> frames, bool copies,
+              Input<double, nb::shape<-1, kBranches, kDof>> q, Input<bool, nb::shape<-1, kBranches>> ok,
+              Input<std::uint8_t, nb::shape<-1, kBranches>> flags,
+              Input<double, nb::shape<-1, kBranches, 2>> errors,
+              Output<double, nb::shape<-1, -1, kDof>> out_q, Output<bool, nb::ndim<2>> out_valid,
+              Output<std::int16_t, nb::ndim<2>> out_branch, Output<std::uint8_t, nb::ndim<2>> out_flags,
+              Output<double, nb::shape<-1, -1, 2>> out_errors) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {q.shape(0), ok.shape(0), flags.shape(0), errors.shape(0),
+                                   out_q.shape(0), out_valid.shape(0), out_branch.shape(0),
+                                   out_flags.shape(0), out_errors.shape(0)});
+    const std::size_t width = out_q.shape(1);
+    if (out_valid.shape(1) != width || out_branch.shape(1) != width ||
+        out_flags.shape(1) != width || out_errors.shape(1) != width) {
+      throw std::invalid_argument("expand: output arrays differ in width");
+    }
+    const dhkin::TargetFrames target = target_frames(frames);
+    dhkin::Plan storage;
+    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    bool overflow = false;
+    {
+      nb::gil_scoped_release release;
+      for (std::size_t i = 0; i < n && !overflow; ++i) {
+        const Joints seed = joints_of(seeds.data() + kDof * (seeds.shape(0) == 1 ? 0 : i));
+        dhkin::Branches branches;
+        for (int b = 0; b < kBranches; ++b) {
+          branches.q[b] = joints_of(&q(i, b, 0));
+          branches.ok[b] = ok(i, b);
+          branches.flags[b] = flags(i, b);
+          branches.errors[b] = {errors(i, b, 0), errors(i, b, 1)};
+        }
+        std::size_t slot = 0;
+        const long count = dhkin::expand(
+            plan, target, targets.data() + 16 * i, seed, tolerance, copies, branches,
+            [&](const dhkin::Solution& s) {
+              if (slot >= width) return false;
+              for (int j = 0; j < kDof; ++j) out_q(i, slot, j) = s.q[j];
+              out_branch(i, slot) = static_cast<std::int16_t>(s.branch);
+              out_flags(i, slot) = s.flags;
+              out_errors(i, slot, 0) = s.error.position;
+              out_errors(i, slot, 1) = s.error.rotation;
+              ++slot;
+              return true;
+            });
+        overflow = count < 0;
+        for (std::size_t k = 0; k < width; ++k) {
+          out_valid(i, k) = k < slot;
+          if (k >= slot) {
+            out_branch(i, k) = -1;
+            out_flags(i, k) = 0;
+            for (int j = 0; j < kDof; ++j) out_q(i, k, j) = 0.0;
+            out_errors(i, k, 0) = out_errors(i, k, 1) = 0.0;
+          }
+        }
+      }
+    }
+    if (overflow) throw std::length_error("IK expansion: more solutions than counted");
+  }
+
+ private:
+  static void check_rows(std::size_t n, std::size_t seeds, std::initializer_list<std::size_t> rows) {
+    if (seeds != 1 && seeds != n) throw std::invalid_argument("seeds: expected 1 or N rows");
+    for (std::size_t r : rows) {
+      if (r != n) throw std::invalid_argument("arrays differ in their number of poses");
+    }
+  }
+
+  static void write_info(const dhkin::PoseInfo& pose, double* out) {
+    out[0] = pose.status, out[1] = pose.projection, out[2] = pose.candidates;
+    out[3] = pose.verified, out[4] = pose.dropped, out[5] = pose.best_position;
+    out[6] = pose.best_rotation;
+  }
+
+  dhkin::ClosedFormSolver solver_;
+};
+
+// ---- chains ----------------------------------------------------------------------------------
+
+class ChainModel {
+ public:
+  ChainModel(Input<double, nb::shape<-1, 4, 4>> before, Input<bool, nb::ndim<1>> revolute,
+             Input<double, nb::ndim<1>> direction, Input<double, nb::ndim<1>> offset,
+             Input<double, nb::shape<4, 4>> tail)
+      : chain_(make_chain(before, revolute, direction, offset, tail)) {}
+
+  int dof() const { return chain_.dof(); }
+
+  // FK of N joint vectors (N, n) into out (N, 4, 4): DH frame 0 -> the chain's tail.
+  void fk(Input<double, nb::ndim<2>> q, Output<double, nb::shape<-1, 4, 4>> out) const {
+    const std::size_t n = q.shape(0);
+    if (q.shape(1) != static_cast<std::size_t>(chain_.dof()) || out.shape(0) != n) {
+      throw std::invalid_argument("fk: expected q (N, dof) and out (N, 4, 4)");
+    }
+    nb::gil_scoped_release release;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Frame T = dhkin::fk(chain_, q.data() + chain_.dof() * i);
+      double* o = out.data() + 16 * i;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) o[4 * r + c] = T.R[r][c];
+        o[4 * r + 3] = T.p[r];
+      }
+      o[12] = o[13] = o[14] = 0.0;
+      o[15] = 1.0;
+    }
+  }
+
+ private:
+  dhkin::Chain chain_;
+};
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+  m.doc() = "dhkin's compiled core: chains, the closed-form IK pipeline (see cpp/dhkin/*.hpp).";
+  m.attr("BRANCHES") = kBranches;
+  m.attr("WHY_SIZE") = dhkin::kWhySize;
+  m.attr("ORTHONORMALITY_GATE") = dhkin::kOrthonormalityGate;
+  m.attr("BOTTOM_ROW_TOLERANCE") = dhkin::kBottomRowTolerance;
+  m.attr("FLAG_BAND") = dhkin::kFlagBand;
+  m.attr("MERGE_ANGLE") = dhkin::kMergeAngle;
+  m.attr("FK_ROUNDING") = dhkin::kFkRounding;
+
+  m.def("pose_status", [](Input<double, nb::shape<4, 4>> T) { return static_cast<int>(dhkin::pose_status(T.data())); },
+        "T"_a, "0 for a usable pose (4, 4), else why not (1 not finite, 2 bottom row, 3 not a rotation).");
+  m.def("project",
+        [](Input<double, nb::shape<4, 4>> T) {
+          double moved = 0.0;
+          const Frame f = dhkin::projected_frame(T.data(), moved);
+          auto out = new_array<double>({4, 4});
+          for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) out.data()[4 * r + c] = f.R[r][c];
+            out.data()[4 * r + 3] = f.p[r];
+          }
+          out.data()[15] = 1.0;
+          return nb::make_tuple(out, moved);
+        },
+        "T"_a, "(T with its rotation block projected onto the nearest rotation, Frobenius norm of the change).");
+
+  nb::class_<ChainModel>(m, "Chain")
+      .def(nb::init<Input<double, nb::shape<-1, 4, 4>>, Input<bool, nb::ndim<1>>,
+                    Input<double, nb::ndim<1>>, Input<double, nb::ndim<1>>,
+                    Input<double, nb::shape<4, 4>>>(),
+           "before"_a, "revolute"_a, "direction"_a, "offset"_a, "tail"_a)
+      .def_prop_ro("dof", &ChainModel::dof)
+      .def("fk", &ChainModel::fk, "q"_a, "out"_a);
+
+  nb::class_<ClosedForm>(m, "ClosedForm")
+      .def(nb::init<const nb::dict&, Input<double, nb::shape<2, 4, 4>>>(), "plan"_a, "frames"_a)
+      .def("solve_one", &ClosedForm::solve_one, "T"_a, "seed"_a, "tolerance"_a, "frames"_a,
+           "copies"_a)
+      .def("principal", &ClosedForm::principal, "targets"_a, "seeds"_a, "tolerance"_a,
+           "frames"_a, "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "totals"_a, "why"_a,
+           "info"_a, "direct"_a = true)
+      .def("direct_answers", &ClosedForm::direct_answers, "targets"_a, "seeds"_a,
+           "tolerance"_a, "frames"_a, "answered"_a)
+      .def("expand", &ClosedForm::expand, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,
+           "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "out_q"_a, "out_valid"_a,
+           "out_branch"_a, "out_flags"_a, "out_errors"_a);
+}

@@ -1,0 +1,168 @@
+// The exact chain of a DH table (corrections included): forward kinematics, pose errors and the
+// Jacobian.
+//
+// Any serial chain of a DH table is written as
+//
+//     T(q) = P_1 Z_1(v_1) P_2 Z_2(v_2) ... P_n Z_n(v_n) P_tail,    v_j = direction_j q_j + offset_j
+//
+// with P_j constant rigid transforms and Z_j = Rz(v_j) (revolute) or Tz(v_j) (prismatic): joint j
+// moves about / along the z axis of the frame P_1 Z_1 ... P_j. T is DH frame 0 -> DH frame n
+// (the IK turns its targets into that frame). dhkin.ik.plan.chain_parts builds the P_j from a
+// table in either DH convention.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "dhkin/angles.hpp"
+#include "dhkin/frame.hpp"
+
+namespace dhkin {
+
+// Joints of the closed-form families (and of every arm the IK core solves).
+constexpr int kDof = 6;
+using Joints = std::array<double, kDof>;
+// One flag per joint (e.g. the joints a refinement keeps fixed).
+using JointMask = std::array<bool, kDof>;
+
+// Most joints of any chain (dhkin.dh.MAX_JOINTS).
+constexpr int kMaxJoints = 32;
+
+struct ChainJoint {
+  Frame before;            // P_j: the constant frame before the joint's motion
+  bool revolute = true;    // Rz (revolute) or Tz (prismatic)
+  double direction = 1.0;  // v_j = direction q_j + offset
+  double offset = 0.0;
+
+  // The DH variable (theta or d) at joint value q.
+  double motion(double q) const { return direction * q + offset; }
+};
+
+struct Chain {
+  std::vector<ChainJoint> joints;
+  Frame tail;  // P_tail
+
+  int dof() const { return static_cast<int>(joints.size()); }
+};
+
+// f = f * Z(v): the joint's motion.
+inline void apply_motion(Frame& f, const ChainJoint& joint, double q) {
+  const double v = joint.motion(q);
+  if (joint.revolute) {
+    const SinCos t = sincos(v);
+    turn_about_z(f, t.c, t.s);
+  } else {
+    slide_along_z(f, v);
+  }
+}
+
+// T(q), DH frame 0 -> DH frame n; q has chain.dof() values.
+inline Frame fk(const Chain& chain, const double* q) {
+  Frame state = chain.joints[0].before;
+  apply_motion(state, chain.joints[0], q[0]);
+  const int n = chain.dof();
+  for (int j = 1; j < n; ++j) {
+    state = state * chain.joints[j].before;
+    apply_motion(state, chain.joints[j], q[j]);
+  }
+  return state * chain.tail;
+}
+
+// The frame each joint moves about (before its motion), frames[j] for j < n, and T(q) in
+// frames[n]. frames must hold dof() + 1 frames.
+inline void fk_frames(const Chain& chain, const double* q, Frame* frames) {
+  const int n = chain.dof();
+  Frame state;
+  for (int j = 0; j < n; ++j) {
+    state = j == 0 ? chain.joints[0].before : state * chain.joints[j].before;
+    frames[j] = state;
+    apply_motion(state, chain.joints[j], q[j]);
+  }
+  frames[n] = state * chain.tail;
+}
+
+// Position (m) and rotation (rad) error of a frame against a target.
+struct PoseError {
+  double position = 0.0;
+  double rotation = 0.0;
+
+  double largest() const { return position > rotation ? position : rotation; }
+  // Both errors at most `tolerance` (false for NaN).
+  bool within(double tolerance) const { return position <= tolerance && rotation <= tolerance; }
+};
+
+// The error of `state` against `target`: |p - p_t| and the angle of R^T R_t, computed as
+// atan2(s, c) with s = |vee(E - E^T)| / 2, c = (trace E - 1) / 2, E = R^T R_t.
+inline PoseError pose_error(const Frame& state, const Frame& target) {
+  double e[3][3];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      e[r][c] = state.R[0][r] * target.R[0][c] + state.R[1][r] * target.R[1][c] +
+                state.R[2][r] * target.R[2][c];
+    }
+  }
+  const double dx = state.p[0] - target.p[0], dy = state.p[1] - target.p[1],
+               dz = state.p[2] - target.p[2];
+  const double s = 0.5 * std::sqrt((e[2][1] - e[1][2]) * (e[2][1] - e[1][2]) +
+                                    (e[0][2] - e[2][0]) * (e[0][2] - e[2][0]) +
+                                    (e[1][0] - e[0][1]) * (e[1][0] - e[0][1]));
+  const double c = 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0);
+  return {std::sqrt(dx * dx + dy * dy + dz * dz), atan2(s, c)};
+}
+
+// The error of T(q) against `target`.
+inline PoseError check(const Chain& chain, const double* q, const Frame& target) {
+  return pose_error(fk(chain, q), target);
+}
+
+// The twist taking `state` to `target`, in DH frame 0: e[0..2] = p_t - p, e[3..5] = the rotation
+// vector of R_t R^T. Returns the two errors.
+inline PoseError error_twist(const Frame& state, const Frame& target, double* e) {
+  for (int r = 0; r < 3; ++r) e[r] = target.p[r] - state.p[r];
+  // M = R_t R^T: its skew part carries sin(angle) * axis, its trace 1 + 2 cos(angle)
+  double m[3][3];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      m[r][c] = target.R[r][0] * state.R[c][0] + target.R[r][1] * state.R[c][1] +
+                target.R[r][2] * state.R[c][2];
+    }
+  }
+  const double v0 = 0.5 * (m[2][1] - m[1][2]);
+  const double v1 = 0.5 * (m[0][2] - m[2][0]);
+  const double v2 = 0.5 * (m[1][0] - m[0][1]);
+  const double s = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
+  const double angle = atan2(s, 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0));
+  const double scale = s > 0.0 ? angle / s : 1.0;
+  e[3] = v0 * scale, e[4] = v1 * scale, e[5] = v2 * scale;
+  return {std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), angle};
+}
+
+// The geometric Jacobian (6 x n, row-major J[row * n + j]): linear and angular velocity of DH
+// frame n's origin per unit joint value, in DH frame 0, from fk_frames' frames.
+inline void jacobian(const Chain& chain, const Frame* frames, double* J) {
+  const int n = chain.dof();
+  const Frame& end = frames[n];
+  for (int j = 0; j < n; ++j) {
+    const double d = chain.joints[j].direction;
+    const Vec3 z = frames[j].column(2);
+    if (chain.joints[j].revolute) {
+      const Vec3 arm = end.translation() - frames[j].translation();
+      const Vec3 v = cross(z, arm);
+      J[0 * n + j] = d * v.x, J[1 * n + j] = d * v.y, J[2 * n + j] = d * v.z;
+      J[3 * n + j] = d * z.x, J[4 * n + j] = d * z.y, J[5 * n + j] = d * z.z;
+    } else {
+      J[0 * n + j] = d * z.x, J[1 * n + j] = d * z.y, J[2 * n + j] = d * z.z;
+      J[3 * n + j] = 0.0, J[4 * n + j] = 0.0, J[5 * n + j] = 0.0;
+    }
+  }
+}
+
+// The chain whose tail ends at `point` (given in DH frame n): errors are then measured there.
+inline Chain extended_to(const Chain& chain, const Vec3& point) {
+  Chain out = chain;
+  out.tail = moved_to(chain.tail, point);
+  return out;
+}
+
+}  // namespace dhkin

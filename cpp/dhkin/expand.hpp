@@ -1,0 +1,107 @@
+// Step 4 of the pipeline: the in-limit 2pi copies of each branch's solution (every copy, or the
+// one nearest the seed), verified again where a limit or the tolerance margin asks.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "dhkin/copies.hpp"
+#include "dhkin/pipeline.hpp"
+#include "dhkin/plan.hpp"
+
+namespace dhkin {
+
+// One solution of a pose: joint values, its branch, flags and errors.
+struct Solution {
+  Joints q{};
+  int branch = -1;
+  std::uint8_t flags = 0;
+  PoseError error;
+};
+
+// Per branch: how many solutions step 4 can give (every in-limit copy, or 1 when `copies` is
+// false and the branch has an in-limit copy; 0 for a branch that is not ok).
+inline std::array<long, kBranches> copy_totals(const Plan& plan, const Branches& branches,
+                                               double tolerance, bool copies) {
+  const double slack = tolerance / plan.lever;
+  std::array<long, kBranches> totals{};
+  for (int b = 0; b < kBranches; ++b) {
+    long total = branches.ok[b] ? 1 : 0;
+    for (int j = 0; j < kDof && total != 0; ++j) {
+      const long count = turn_range(plan.limits[j], plan.revolute(j), branches.q[b][j], slack).count;
+      total = copies ? total * count : std::min(total, count);
+    }
+    totals[b] = total;
+  }
+  return totals;
+}
+
+// Step 4 for one pose: `emit(solution)` for each solution, in order of branch, then of copy
+// (mixed radix over the joints' copies, last joint fastest); with `copies` false one per branch,
+// the copy nearest the seed. A copy set onto a limit, and every copy of a branch whose error is
+// within kCopyMargin of the tolerance, is verified again (and dropped when it fails). Returns the
+// count, or -1 as soon as `emit` returns false (no room).
+template <class Emit>
+long expand(const Plan& plan, const TargetFrames& frames, const double* T, const Joints& seed,
+            double tolerance, bool copies, const Branches& branches, Emit&& emit) {
+  const double slack = tolerance / plan.lever;
+  tolerance = plan.verification_tolerance(tolerance);
+  bool have_target = false;
+  Frame T_at;
+  long count = 0;
+  std::array<long, kDof> first{}, counts{}, digits{};
+  for (int b = 0; b < kBranches; ++b) {
+    if (!branches.ok[b]) continue;
+    const Joints& q = branches.q[b];
+    long total = 1;
+    for (int j = 0; j < kDof; ++j) {
+      if (copies) {
+        const TurnRange range = turn_range(plan.limits[j], plan.revolute(j), q[j], slack);
+        first[j] = range.first, counts[j] = range.count;
+      } else {
+        long turn = 0;
+        const bool exists = nearest_turn(plan.limits[j], plan.revolute(j), q[j], slack, seed[j], turn);
+        first[j] = turn, counts[j] = exists ? 1 : 0;
+      }
+      total *= counts[j];
+      digits[j] = 0;
+    }
+    const bool recheck = branches.errors[b].largest() > tolerance - kCopyMargin;
+    for (long k = 0; k < total; ++k) {
+      Solution solution;
+      bool clipped = false;
+      for (int j = 0; j < kDof; ++j) {
+        const bool revolute = plan.revolute(j);
+        const long turn = first[j] + digits[j];
+        const double shifted = revolute ? q[j] + kTwoPi * static_cast<double>(turn) : q[j];
+        solution.q[j] = placed(plan.limits[j], revolute, q[j], turn);
+        clipped = clipped || solution.q[j] != shifted;
+      }
+      solution.error = branches.errors[b];
+      bool keep = true;
+      if (clipped || recheck) {
+        if (!have_target) {
+          double moved;
+          T_at = moved_to(frames.to_dh(projected_frame(T, moved)), frames.tcp_point);
+          have_target = true;
+        }
+        solution.error = check(plan.chain, solution.q.data(), T_at);
+        keep = solution.error.within(tolerance);
+      }
+      if (keep) {
+        solution.branch = b;
+        solution.flags = branches.flags[b];
+        if (!emit(solution)) return -1;
+        ++count;
+      }
+      for (int j = kDof - 1; j >= 0; --j) {  // next mixed-radix digit, last joint fastest
+        if (++digits[j] < counts[j]) break;
+        digits[j] = 0;
+      }
+    }
+  }
+  return count;
+}
+
+}  // namespace dhkin

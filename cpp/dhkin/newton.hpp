@@ -1,0 +1,188 @@
+// Newton's method on the exact chain: damped Gauss-Newton steps solved by Householder QR of the
+// Jacobian itself (not J^T J, so that a chain a hair from singular, sigma_min ~ 1e-8, keeps its
+// accuracy), joint steps bounded, the best iterate kept.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "dhkin/chain.hpp"
+
+namespace dhkin {
+
+namespace newton {
+
+// Refinement stops once both errors are below this fraction of the verification tolerance (a
+// thousandfold margin: the 2pi copies and the caller's check then pass without re-solving).
+constexpr double kRefineFraction = 1e-3;
+// At most this many Newton steps per refinement. The closed form starts within the model
+// deviation (millimetres on a calibrated arm); converging refinements take 3-8 steps, more when
+// the pose is near a singularity of the exact chain.
+constexpr int kMaxSteps = 30;
+// Chain evaluations allowed by default (each rejected step costs one).
+constexpr int kBudget = 4 * kMaxSteps;
+// Largest change of one joint per step (rad or m): near a singularity a full Gauss-Newton step
+// can jump to another branch.
+constexpr double kMaxJointStep = 0.3;
+// A step is taken when it leaves the error below this multiple of the current one. Newton's
+// iterates may first grow before they converge (from a start millimetres away, and near a
+// singular root, where the first full step overshoots by orders of magnitude and convergence is
+// linear). Joint steps are bounded and the best iterate is returned, so only a step that makes
+// the error a million times larger is damped.
+constexpr double kGrowth = 1e6;
+// A monotone descent (Levenberg-Marquardt): a step is taken only when the error does not grow.
+constexpr double kMonotone = 1.0;
+// Damping after a rejected step: this fraction of the diagonal of J^T J first, growing a
+// hundredfold per rejection; a taken step divides it by ten.
+constexpr double kDampingStart = 1e-9;
+// Damping to start from when the start is a seed, not a closed-form candidate (Marquardt's
+// start for a guess that may be far from a root: a hundredth of the diagonal of J^T J).
+constexpr double kSeedDamping = 1e-2;
+// Largest damping before giving up (the step is then shorter than rounding).
+constexpr double kDampingLimit = 1e12;
+
+// The step minimising |J step - e|^2 + damping * sum_j (|J_j| step_j)^2 over the free joints
+// (fixed ones get step 0), by Householder QR of the stacked system [J; sqrt(damping) diag(|J_j|)].
+// J is 6 x kDof row-major. False when the free columns are rank deficient.
+inline bool least_squares(const double* J, const double* e, const JointMask& fixed,
+                          double damping, double* step) {
+  constexpr int rows = 6 + kDof;
+  double A[rows][kDof];
+  double b[rows];
+  for (int j = 0; j < kDof; ++j) step[j] = 0.0;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < kDof; ++c) A[r][c] = 0.0;
+    b[r] = r < 6 ? e[r] : 0.0;
+  }
+  int m = 0;  // free columns
+  for (int j = 0; j < kDof; ++j) {
+    if (fixed[j]) continue;
+    double column = 0.0;
+    for (int r = 0; r < 6; ++r) {
+      A[r][m] = J[r * kDof + j];
+      column += J[r * kDof + j] * J[r * kDof + j];
+    }
+    A[6 + m][m] = std::sqrt(damping * column);
+    ++m;
+  }
+  for (int k = 0; k < m; ++k) {  // Householder reflection of column k below the diagonal
+    double length = 0.0;
+    for (int r = k; r < rows; ++r) length += A[r][k] * A[r][k];
+    length = std::sqrt(length);
+    if (length == 0.0) return false;
+    const double alpha = A[k][k] >= 0.0 ? -length : length;
+    A[k][k] -= alpha;
+    double v_norm = 0.0;
+    for (int r = k; r < rows; ++r) v_norm += A[r][k] * A[r][k];
+    if (v_norm > 0.0) {
+      for (int c = k + 1; c < m; ++c) {
+        double d = 0.0;
+        for (int r = k; r < rows; ++r) d += A[r][k] * A[r][c];
+        const double factor = 2.0 * d / v_norm;
+        for (int r = k; r < rows; ++r) A[r][c] -= factor * A[r][k];
+      }
+      double d = 0.0;
+      for (int r = k; r < rows; ++r) d += A[r][k] * b[r];
+      const double factor = 2.0 * d / v_norm;
+      for (int r = k; r < rows; ++r) b[r] -= factor * A[r][k];
+    }
+    A[k][k] = alpha;  // R's diagonal
+  }
+  double largest = 0.0;
+  for (int k = 0; k < m; ++k) largest = std::max(largest, std::abs(A[k][k]));
+  double solution[kDof];
+  for (int k = m - 1; k >= 0; --k) {
+    if (!(std::abs(A[k][k]) > 1e-15 * largest)) return false;
+    double total = b[k];
+    for (int c = k + 1; c < m; ++c) total -= A[k][c] * solution[c];
+    solution[k] = total / A[k][k];
+  }
+  m = 0;
+  for (int j = 0; j < kDof; ++j) {
+    if (!fixed[j]) step[j] = solution[m++];
+  }
+  return true;
+}
+
+struct Settings {
+  int budget = kBudget;       // chain evaluations
+  double growth = kGrowth;    // kGrowth: Newton; kMonotone: a monotone descent
+  double damping_start = 0.0;
+};
+
+}  // namespace newton
+
+// Newton's method on the exact chain from q, in place, towards `target` (DH frame 0 -> n);
+// joints marked `fixed` keep their value (the seed's choice of a free joint at a singularity).
+// q ends as the best iterate; returns its errors.
+//
+// Each step minimises |J dq - e|^2 + lambda sum_j (|J_j| dq_j)^2 over the free joints by QR
+// (lambda = 0 is Gauss-Newton), shortened to kMaxJointStep per joint. A step is taken unless it
+// makes |e| more than `growth` times larger; then lambda grows (kDampingStart, x100) and the step
+// is solved again; `damping_start` damps the first steps. Stops when both errors are below
+// kRefineFraction * tolerance, after kMaxSteps, after `budget` evaluations of the chain, or when
+// lambda passes kDampingLimit.
+inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, const JointMask& fixed,
+                        double tolerance, const newton::Settings& settings = {}) {
+  using namespace newton;
+  std::array<Frame, kDof + 1> frames, trial_frames;
+  double e[6], trial_e[6], J[6 * kDof], step[kDof];
+  Joints trial, best = q;
+  const double goal = kRefineFraction * tolerance;
+  fk_frames(chain, q.data(), frames.data());
+  PoseError error = error_twist(frames[kDof], target, e);
+  double size = error.position * error.position + error.rotation * error.rotation;
+  PoseError best_error = error;
+  double best_size = size;
+  // Directions along which even a maximal joint step moves the pose by less than the goal
+  // (singular values below goal / kMaxJointStep, e.g. the free joint of an exactly singular
+  // wrist) carry no information: this damping floor suppresses them, keeping the step the
+  // minimum-norm one, while sigma ~ 1e-8 (a chain a hair from singular) stays fully active.
+  const double floor = (goal / kMaxJointStep) * (goal / kMaxJointStep);
+  double damping = std::max(floor, settings.damping_start);
+  int evaluations = 1;
+  PoseError trial_error;
+  double trial_size = 0.0;
+  for (int iteration = 0; iteration < kMaxSteps; ++iteration) {
+    if ((error.position <= goal && error.rotation <= goal) || evaluations >= settings.budget) {
+      break;
+    }
+    jacobian(chain, frames.data(), J);
+    bool taken = false;
+    while (!taken) {
+      if (least_squares(J, e, fixed, damping, step)) {
+        double longest = 0.0;
+        for (int a = 0; a < kDof; ++a) longest = std::max(longest, std::abs(step[a]));
+        const double shrink = longest > kMaxJointStep ? kMaxJointStep / longest : 1.0;
+        for (int a = 0; a < kDof; ++a) trial[a] = q[a] + shrink * step[a];
+        fk_frames(chain, trial.data(), trial_frames.data());
+        ++evaluations;
+        trial_error = error_twist(trial_frames[kDof], target, trial_e);
+        trial_size = trial_error.position * trial_error.position +
+                     trial_error.rotation * trial_error.rotation;
+        taken = trial_size <= settings.growth * settings.growth * size;
+      }
+      if (!taken) {
+        damping = std::max(100.0 * damping, kDampingStart + floor);
+        if (damping > kDampingLimit || evaluations >= settings.budget) break;
+      }
+    }
+    if (!taken) break;
+    q = trial;
+    for (int r = 0; r < 6; ++r) e[r] = trial_e[r];
+    frames = trial_frames;
+    error = trial_error;
+    size = trial_size;
+    damping = damping > kDampingStart ? std::max(0.1 * damping, floor) : floor;
+    if (size < best_size) {
+      best_error = error;
+      best_size = size;
+      best = q;
+    }
+  }
+  q = best;
+  return best_error;
+}
+
+}  // namespace dhkin

@@ -1,0 +1,364 @@
+// Closed-form solver of the offset-wrist family (UR3/UR5/UR10, UR e-series, AUBO i-series,
+// Techman).
+//
+// The geometry and the method are described in dhkin.ik.offset_wrist: product of exponentials in
+// DH frame 0; q1 from the wrist point's offset along the common direction n of axes 2-4 (two
+// shoulder branches); q5 from n(q1) . z6 = cos(q5 - psi) (two wrist branches); q6 from the rest
+// of the orientation; q2, q3, q4 from the planar motion G that remains (two elbow branches).
+//
+// `near` marks free joints within the seed band: q6 at the wrist singularity, q1 with the wrist
+// point on axis 1 (no lateral offset), q2 with axis 4 on axis 2. `why`: the wrist point's distance
+// from axis 1, the least it needs (|c|), and the arm span (axis 4 from axis 2) of the four
+// shoulder/wrist branches. Near the wrist singularity q6 barely moves the flange's orientation but
+// moves axis 4 on a circle about the wrist point: where that puts axis 4 out of the arm's reach,
+// q6 is turned the least that brings it onto the reach boundary (`kept_in_reach`); the pipeline
+// verifies the result like every solution. Roots near a reach boundary of a refined table: as in
+// spherical.hpp (`spread`).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "dhkin/angles.hpp"
+#include "dhkin/bands.hpp"
+#include "dhkin/family.hpp"
+#include "dhkin/frame.hpp"
+
+namespace dhkin {
+
+struct OffsetGeometry {
+  Vec3 directions[6];      // joint axis directions, times each joint's direction
+  Vec3 points[6];          // a point on each axis
+  Vec3 n;                  // common direction of axes 2-4
+  Vec3 side;               // axis 1 x n
+  Vec3 plane_x, plane_y;   // angles about n are measured from plane_x towards plane_y
+  Vec3 wrist_in_flange;    // the wrist point (axes 5 and 6 meet) in DH frame 6
+  Vec3 wrist_point;        // the same at q = 0 in DH frame 0
+  Mat3 home_rotation;      // DH frame 6 at q = 0: rotation
+  Frame home_inverse;      // its inverse transform
+  Vec3 upper_arm, forearm, axis3_x_forearm;
+  double lateral = 0.0;    // c: the wrist point's offset along n from axis 1
+  double left_sign = 1.0, lateral_sign = 1.0, up_sign = 1.0;
+  double psi = 0.0;        // n(q1) . z6 = cos(q5 - psi)
+  double sign3 = 1.0, sign4 = 1.0;
+  double upper_length = 0.0, forearm_length = 0.0;
+  double elbow_alpha = 0.0, elbow_base = 0.0, elbow_turn = 0.0;
+  double scale = 1.0;
+  double spread = 0.0;     // m: least distance from a reach boundary roots are computed at
+};
+
+namespace offset {
+
+// Cosines and sines of -q5, -q6, -q1: the motion G = E1(-q1) T M^-1 E6(-q6) E5(-q5) of joints
+// 2-4 (with T_home = T M^-1).
+struct Turns {
+  SinCos q5, q6, q1;
+};
+
+// The rigid motion turning about the line of joint axis `joint` by the angle t, applied to v: a
+// point, or a direction.
+inline Vec3 screw_apply(const OffsetGeometry& g, int joint, const SinCos& t, const Vec3& v,
+                        bool point) {
+  const Vec3& axis = g.directions[joint];
+  if (!point) return rotate_about(axis, t.c, t.s, v);
+  const Vec3& p = g.points[joint];
+  return rotate_about(axis, t.c, t.s, v - p) + p;
+}
+
+// G v (a point or a direction).
+inline Vec3 motion_apply(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
+                         const Vec3& v, bool point) {
+  Vec3 x = screw_apply(g, 4, turns.q5, v, point);
+  x = screw_apply(g, 5, turns.q6, x, point);
+  const Vec3 y = point ? T_home.apply(x) : T_home.rotate(x);
+  return screw_apply(g, 0, turns.q1, y, point);
+}
+
+// Component of v normal to n.
+inline Vec3 in_plane(const OffsetGeometry& g, const Vec3& v) { return v - dot(v, g.n) * g.n; }
+
+// The arm's target: axis 4's point under G, from axis 2's point, normal to n.
+inline Vec3 arm_point(const OffsetGeometry& g, const Frame& T_home, const Turns& turns) {
+  return in_plane(g, motion_apply(g, T_home, turns, g.points[3], true) - g.points[1]);
+}
+
+// Angle about n of v from plane_x.
+inline double plane_angle(const OffsetGeometry& g, const Vec3& v) {
+  return atan2(dot(v, g.plane_y), dot(v, g.plane_x));
+}
+
+// q6, turned the least that brings axis 4 onto the arm's reach boundary when it lies out of
+// reach by more than `clamp`; q6 itself otherwise (or when no turn reaches it).
+inline double kept_in_reach(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
+                            const Vec3& arm, double q5, double q6, double clamp) {
+  const double low = std::abs(g.upper_length - g.forearm_length);
+  const double high = g.upper_length + g.forearm_length;
+  const double span = norm(arm);
+  const bool too_far = span > high + clamp;
+  const bool too_near = span < low - clamp;
+  if (!(too_far || too_near)) return q6;
+  const Vec3 centre = in_plane(g, motion_apply(g, T_home, turns, g.wrist_point, true) -
+                                      g.points[1]);
+  const double boundary = too_far ? high : low;
+  const Vec3 d = arm - centre;
+  const double radius = norm(d);
+  const double distance = norm(centre);
+  const double denominator = 2.0 * distance * radius;
+  if (!(denominator > 0.0)) return q6;
+  double cos_needed = (boundary * boundary - distance * distance - radius * radius) / denominator;
+  if (!(std::abs(cos_needed) <= 1.0)) {
+    // tangent reach (stretched or folded arm): rounding may put |cos| a hair above 1
+    if (std::abs(cos_needed) - 1.0 > clamp / std::max(distance, radius)) return q6;
+    cos_needed = std::min(std::max(cos_needed, -1.0), 1.0);
+  }
+  const double opening = std::acos(cos_needed);
+  const double now = plane_angle(g, d) - plane_angle(g, centre);
+  const double first = wrap(opening - now), second = wrap(-opening - now);
+  const double turn = std::abs(first) <= std::abs(second) ? first : second;
+  const SinCos t5 = sincos(q5);
+  const Vec3 axis6 = motion_apply(g, T_home, turns,
+                                  rotate_about(g.directions[4], t5.c, t5.s, g.directions[5]),
+                                  false);
+  // axis 6 is nearly +-n here: turning q6 by delta turns axis 4 about n by -sign * delta
+  return q6 - (dot(axis6, g.n) >= 0.0 ? 1.0 : -1.0) * turn;
+}
+
+// q2, q3, q4 of one elbow branch, with its validity, flag and near bits.
+struct ElbowRoot {
+  double q2 = 0.0, q3 = 0.0, q4 = 0.0;
+  bool valid = false;
+  std::uint8_t flag = 0, near = 0;
+};
+
+// Elbow branch e for the motion G of joints 2-4: the law of cosines for q3, the planar rotation
+// taking the bent arm onto the target for q2, the angle of G about n for q4.
+inline ElbowRoot elbow(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
+                       const Vec3& arm, double reach_side, double seed_q2,
+                       const FamilyRequest& request, int e) {
+  const double span = norm(arm);
+  const double L2 = g.upper_length, L3 = g.forearm_length;
+  const double low = std::abs(L2 - L3), high = L2 + L3;
+  const double outer = high - span, inner = span - low;
+  ElbowRoot out;
+  const bool reach_ok = outer >= -request.clamp && inner >= -request.clamp;
+  // (L2 L3)^2 - kappa^2 in factored form: accurate near both boundaries
+  double root = std::sqrt(std::max(outer, g.spread) * (high + span) * std::max(inner, g.spread) *
+                          (span + low)) / 2.0;
+  const double kappa = (span * span - L2 * L2 - L3 * L3) / 2.0;
+  const bool merged = atan2(root, std::abs(kappa)) <= kMergeAngle;
+  if (merged) root = 0.0;
+  out.flag = merged || root <= kFlagBand * L2 * L3 ? kElbow : 0;
+  const double half = atan2(root, kappa);
+  double first = g.elbow_base + half, second = g.elbow_base - half;
+  const SinCos f = sincos(first);
+  const double turn = f.c * g.elbow_turn + g.sign3 * f.s * g.elbow_alpha;
+  if ((turn >= 0.0 ? 1.0 : -1.0) != reach_side) std::swap(first, second);
+  out.q3 = e == 0 ? first : second;
+  const SinCos t3 = sincos(out.q3);
+  const double total = plane_angle(g, motion_apply(g, T_home, turns, g.plane_x, false));
+  const Vec3 bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
+  out.near = norm(bent) <= request.seed_length ? kElbow : 0;
+  const bool seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
+  if (outer < 0.0 || inner < 0.0) out.near |= kClamped;
+  out.q2 = seeded ? seed_q2 : atan2(dot(g.n, cross(bent, arm)), dot(bent, arm));
+  out.q4 = g.sign4 * (total - out.q2 - g.sign3 * out.q3);
+  out.valid = reach_ok && (e == 0 || !merged);
+  return out;
+}
+
+// One member of the solution family at the wrist singularity, with q6 = t (moved onto the arm's
+// reach if needed).
+struct Member {
+  double q2 = 0.0, q3 = 0.0, q4 = 0.0, q6 = 0.0;
+  bool valid = false;
+  double distance = 0.0;  // squared joint distance to the seed over joints 2-4 and 6 (wrapped)
+  std::uint8_t flag = 0;  // its kElbow flag
+};
+
+inline Member member(const OffsetGeometry& g, const Frame& T_home, const SinCos& t1, double q5,
+                     double t, double reach_side, const Joints& seed, const FamilyRequest& request,
+                     int e) {
+  const SinCos t5 = sincos(-q5);
+  Turns turns{t5, sincos(-t), t1};
+  Vec3 arm = arm_point(g, T_home, turns);
+  const double kept = kept_in_reach(g, T_home, turns, arm, q5, t, request.clamp);
+  if (kept != t) {
+    t = kept;
+    turns.q6 = sincos(-t);
+    arm = arm_point(g, T_home, turns);
+  }
+  const ElbowRoot root = elbow(g, T_home, turns, arm, reach_side, seed[1], request, e);
+  Member out;
+  out.q2 = root.q2, out.q3 = root.q3, out.q4 = root.q4, out.q6 = t;
+  const double a = wrap(root.q2 - seed[1]), b = wrap(root.q3 - seed[2]),
+               c = wrap(root.q4 - seed[3]), d = wrap(t - seed[5]);
+  out.distance = a * a + b * b + c * c + d * d;
+  out.valid = root.valid && std::isfinite(out.distance);
+  out.flag = root.flag;
+  return out;
+}
+
+// Nearest-member search over q6: a grid of this half-width and step (rad) around the seed's q6
+// (where q6 would leave axis 4 out of reach it is moved onto the reach boundary, so far members
+// are found at the grid's edge), then golden-section search to kMemberPrecision within a step of
+// the best grid point. The distance is not smooth (square roots near a stretched or folded elbow,
+// the move onto the boundary): no derivatives are used.
+constexpr double kMemberHalfWidth = kPi;
+constexpr double kMemberStep = 0.05;
+constexpr double kMemberPrecision = 1e-9;
+// Grid points on each side of the seed's q6 (the whole turn: q2-q4 follow q6, so the nearest
+// member can be far from the seed's q6).
+constexpr int kMemberGrid = 63;  // ceil(kMemberHalfWidth / kMemberStep)
+static_assert(kMemberGrid * kMemberStep >= kMemberHalfWidth &&
+                  (kMemberGrid - 1) * kMemberStep < kMemberHalfWidth,
+              "kMemberGrid = ceil(kMemberHalfWidth / kMemberStep)");
+const double kGolden = 0.5 * (std::sqrt(5.0) - 1.0);
+
+// At the wrist singularity the pose leaves a one-parameter family (q6 free, q2, q3, q4 following
+// it): the member nearest the seed in joint space (squared distance over joints 2-4 and 6),
+// searched over q6. False when no member of this elbow branch exists near the seed.
+inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const SinCos& t1,
+                           double q5, double reach_side, const Joints& seed,
+                           const FamilyRequest& request, int e, Member& found) {
+  double best_t = seed[5], best = std::numeric_limits<double>::infinity();
+  for (int k = -kMemberGrid; k <= kMemberGrid; ++k) {
+    const double t = seed[5] + k * kMemberStep;
+    const Member m = member(g, T_home, t1, q5, t, reach_side, seed, request, e);
+    if (m.valid && m.distance < best) best_t = t, best = m.distance;
+  }
+  if (best == std::numeric_limits<double>::infinity()) return false;
+  const auto value = [&](double t) {
+    const Member m = member(g, T_home, t1, q5, t, reach_side, seed, request, e);
+    return m.valid ? m.distance : std::numeric_limits<double>::infinity();
+  };
+  double low = best_t - kMemberStep, high = best_t + kMemberStep;
+  double a = high - kGolden * (high - low), b = low + kGolden * (high - low);
+  double value_a = value(a), value_b = value(b);
+  while (high - low > kMemberPrecision) {
+    if (value_a <= value_b) {
+      high = b, b = a, value_b = value_a;
+      a = high - kGolden * (high - low);
+      value_a = value(a);
+    } else {
+      low = a, a = b, value_a = value_b;
+      b = low + kGolden * (high - low);
+      value_b = value(b);
+    }
+  }
+  found = member(g, T_home, t1, q5, 0.5 * (low + high), reach_side, seed, request, e);
+  if (!found.valid || found.distance > best) {  // the grid point is better (a kink inside)
+    found = member(g, T_home, t1, q5, best_t, reach_side, seed, request, e);
+  }
+  return true;
+}
+
+}  // namespace offset
+
+// The 8 branches of the offset-wrist family for target T, DH frame 0 -> 6.
+inline void solve_offset_wrist(const OffsetGeometry& g, const Frame& T,
+                               const FamilyRequest& request, Candidates& out) {
+  using namespace offset;
+  const Joints& seed = *request.seed;
+  const Frame T_home = T * g.home_inverse;
+  // q1: both roots of n(q1) . (wrist point - r1) = c
+  const Vec3 h = T.apply(g.wrist_in_flange) - g.points[0];
+  const double along_n = dot(h, g.n), along_side = dot(h, g.side);
+  const double distance = std::sqrt(along_n * along_n + along_side * along_side);
+  const double c = g.lateral;
+  out.why[0] = distance, out.why[1] = std::abs(c);
+  const double gap = distance - std::abs(c);
+  const bool shoulder_ok = gap >= -request.clamp;
+  double root = std::sqrt(std::max(gap, g.spread) * (distance + std::abs(c)));
+  const bool shoulder_merged = c != 0.0 && atan2(root, std::abs(c)) <= kMergeAngle;
+  if (shoulder_merged) root = 0.0;
+  const std::uint8_t shoulder_flag =
+      shoulder_merged || root <= kFlagBand * g.scale ? kShoulder : 0;
+  // Near the shoulder merge q1 is only as good as the pose over the root: a pose known to `clamp`
+  // moves it by ~clamp / root (at most ~sqrt(2 clamp / |c|)), and q5 inherits that: the wrist
+  // counts as near singular within this much more.
+  double q1_uncertainty = 0.0;
+  if (c != 0.0) {
+    q1_uncertainty = std::min(request.clamp / std::max(root, 1e-300),
+                              std::sqrt(2.0 * request.clamp / std::abs(c)));
+  }
+  std::uint8_t shoulder_near = c == 0.0 && distance <= request.seed_length ? kShoulder : 0;
+  const bool shoulder_seeded = shoulder_near != 0 && (request.use_seed & kShoulder) != 0;
+  if (gap < 0.0) shoulder_near |= kClamped;
+  const double phase = atan2(along_side, along_n);
+  const double half = atan2(root, c);
+  const Vec3& w6 = g.directions[5];
+  for (int s = 0; s < 2; ++s) {
+    double q1;
+    if (shoulder_seeded) {
+      q1 = seed[0] + (s == 0 ? 0.0 : kPi);
+    } else {
+      q1 = s == 0 ? phase + g.left_sign * half : phase - g.left_sign * half;
+    }
+    const double reach_side = s == 0 ? g.lateral_sign : -g.lateral_sign;
+    const bool q1_valid = shoulder_ok && (s == 0 || !shoulder_merged);
+    // q5 from n(q1) . z6 = cos(q5 - psi), q6 from the rest
+    const SinCos t1 = sincos(q1);
+    const Vec3 m = rotate_about(g.directions[0], t1.c, t1.s, g.n);
+    const Vec3 f{T.R[0][0] * m.x + T.R[1][0] * m.y + T.R[2][0] * m.z,  // R_T^T n(q1)
+                 T.R[0][1] * m.x + T.R[1][1] * m.y + T.R[2][1] * m.z,
+                 T.R[0][2] * m.x + T.R[1][2] * m.y + T.R[2][2] * m.z};
+    const Vec3 u = g.home_rotation * f;  // u = M_R R_T^T n(q1)
+    const double cosine = dot(u, w6);
+    const double sine = norm(cross(w6, u));  // exact for tiny angles (no arccos)
+    const std::uint8_t wrist_flag = sine <= kFlagBand ? kWrist : 0;
+    const std::uint8_t wrist_near = sine <= request.seed_angle + q1_uncertainty ? kWrist : 0;
+    const bool wrist_seeded = wrist_near != 0 && (request.use_seed & kWrist) != 0;
+    const double q5_half = atan2(sine, cosine);
+    const Vec3 a = u - cosine * w6;
+    const SinCos minus_q1 = sincos(-q1);
+    for (int w = 0; w < 2; ++w) {
+      const double q5 = g.psi + (w == 0 ? g.up_sign * q5_half : -g.up_sign * q5_half);
+      const SinCos minus_q5 = sincos(-q5);
+      double q6;
+      if (wrist_seeded) {
+        q6 = seed[5];
+      } else {
+        const Vec3 t = rotate_about(g.directions[4], minus_q5.c, minus_q5.s, g.n);  // R5^T n
+        const Vec3 b = t - dot(t, w6) * w6;
+        q6 = atan2(dot(w6, cross(a, b)), dot(a, b));
+      }
+      Turns turns{minus_q5, sincos(-q6), minus_q1};
+      Vec3 arm = arm_point(g, T_home, turns);
+      if (wrist_near != 0) {
+        const double kept = kept_in_reach(g, T_home, turns, arm, q5, q6, request.clamp);
+        if (kept != q6) {
+          q6 = kept;
+          turns.q6 = sincos(-q6);
+          arm = arm_point(g, T_home, turns);
+        }
+      }
+      out.why[2 + 2 * s + w] = norm(arm);
+      // the two wrist roots coincide exactly: one solution
+      const bool wrist_valid = w == 0 || wrist_seeded || sine != 0.0;
+      for (int e = 0; e < 2; ++e) {
+        const ElbowRoot r = elbow(g, T_home, turns, arm, reach_side, seed[1], request, e);
+        const int b = 4 * s + 2 * e + w;
+        out.q[b] = {q1, r.q2, r.q3, r.q4, q5, q6};
+        out.valid[b] = q1_valid && wrist_valid && r.valid;
+        out.flags[b] = shoulder_flag | wrist_flag | r.flag;
+        out.near[b] = shoulder_near | wrist_near | r.near;
+      }
+      if (wrist_seeded && q1_valid) {
+        for (int e = 0; e < 2; ++e) {
+          const int b = 4 * s + 2 * e + w;
+          Member found;
+          if (nearest_member(g, T_home, minus_q1, q5, reach_side, seed, request, e, found)) {
+            out.q[b][1] = found.q2, out.q[b][2] = found.q3, out.q[b][3] = found.q4;
+            out.q[b][5] = found.q6;
+            out.valid[b] = true;
+            out.flags[b] = (out.flags[b] & ~kElbow) | found.flag;
+          }
+        }
+      }
+    }
+  }
+  out.drop_non_finite();
+}
+
+}  // namespace dhkin

@@ -1,0 +1,292 @@
+// One pose, steps 1-3: the closed-form IK pipeline (batches run the same function per pose).
+//
+// For a target T (4 x 4), base_link -> TCP:
+//
+// 1. check it (pose_status) and project its rotation onto the nearest rotation;
+//    T_dh = base^-1 T (tool tcp)^-1 is DH frame 0 -> DH frame n;
+// 2. the family's closed form on the ideal model gives 8 branch candidates. Where a joint is free
+//    at a singularity within the seed band (the `near` bits: wrist, wrist centre on axis 1 or 2),
+//    the family runs a second time taking that joint from the seed;
+// 3. each candidate is wrapped to (-pi, pi], refined on the exact chain when the table needs it
+//    (Newton; where that fails, continuation along a path of models from the ideal one to the
+//    exact chain; a seeded candidate keeps its seeded joints fixed) and verified by FK on the exact
+//    chain: errors at most `tolerance` in metres and radians. Where the seeded candidate verifies
+//    it is the branch's answer (continuous in the seed), else the regular one; a branch neither of
+//    whose candidates verifies is dropped and counted. The two wrist branches of an arm branch that
+//    both answer with the seed's wrist are one solution. On a refined table, branches that
+//    converged to the same solution are one.
+//
+// Step 4 (the 2pi copies) is expand.hpp. The direct path (direct_branches) is steps 1-3 for a
+// regular pose of an exact-family table (no seeded candidate, every candidate verifies as
+// computed, no two branches merge): the same answer with a fraction of the work; every other
+// pose goes on to solve_branches.
+//
+// `clamp`: reach conditions violated by at most tolerance x (1 + lever) + twice the model
+// deviation are clamped onto their boundary, polished and verified, not rejected: a pose whose
+// joint values verify is never answered empty.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "dhkin/members.hpp"
+#include "dhkin/plan.hpp"
+#include "dhkin/pose.hpp"
+#include "dhkin/roots.hpp"
+#include "dhkin/settle.hpp"
+
+namespace dhkin {
+
+// A pose ready for the pipeline: its DH target, and the target of the TCP point (the chains of
+// the plan end at the TCP).
+struct PoseTargets {
+  Frame T_dh;  // DH frame 0 -> DH frame n
+  Frame T_at;  // T_dh followed by the TCP point: the target of the plan's chains
+};
+
+// Step 1: the pose and the seed checked (a rejection goes to info.status), the rotation
+// projected (info.projection) and the targets computed. False when the pose is not usable.
+inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints& seed,
+                       PoseInfo& info, Branches& branches, PoseTargets& targets) {
+  info = PoseInfo{};
+  info.why.fill(NAN);
+  branches.ok.fill(false);
+  branches.flags.fill(0);
+  info.status = pose_status(T);
+  if (info.status != kUsable) return false;
+  for (double v : seed) {
+    if (!std::isfinite(v)) {
+      info.status = kBadSeed;
+      return false;
+    }
+  }
+  const Frame projected = projected_frame(T, info.projection);
+  targets.T_dh = frames.to_dh(projected);
+  targets.T_at = moved_to(targets.T_dh, frames.tcp_point);
+  return true;
+}
+
+// Steps 1-3 for a regular pose of an exact-family table; false (outputs undefined) for a pose
+// that needs the full pipeline. A rejected pose or seed is answered here (info.status).
+inline bool direct_branches(const Plan& plan, const TargetFrames& frames, const double* T,
+                            const Joints& seed, double tolerance, Branches& branches,
+                            PoseInfo& info) {
+  if (plan.refine) return false;
+  tolerance = plan.verification_tolerance(tolerance);
+  PoseTargets targets;
+  if (!begin_pose(frames, T, seed, info, branches, targets)) return true;
+  Candidates found;
+  plan.solve_family(targets.T_dh, seed, 0, plan.clamp(tolerance), found);
+  for (int b = 0; b < kBranches; ++b) {
+    if (found.near[b] & kFree) return false;  // a seeded candidate to try: the pipeline's step 2
+  }
+  info.why = found.why;
+  for (int b = 0; b < kBranches; ++b) {
+    if (!found.valid[b]) continue;
+    Joints candidate = found.q[b];
+    plan.wrap_revolute(candidate);
+    const PoseError error = check(plan.chain, candidate.data(), targets.T_at);
+    if (!error.within(tolerance)) return false;  // to be polished: the pipeline's step 3
+    branches.q[b] = candidate;
+    branches.ok[b] = true;
+    branches.errors[b] = error;
+    ++info.candidates;
+  }
+  for (int a = 0; a < kBranches; ++a) {
+    for (int b = a + 1; b < kBranches; ++b) {
+      if (branches.ok[a] && branches.ok[b] &&
+          plan.same(branches.q[a], branches.q[b], 2.0 * kMergeAngle)) {
+        return false;  // one solution from two branches: the pipeline merges them
+      }
+    }
+  }
+  for (int b = 0; b < kBranches; ++b) {
+    if (branches.ok[b]) {
+      branches.flags[b] = (found.flags[b] & kShoulder) | plan.value_flags(branches.q[b]);
+      ++info.verified;
+    }
+  }
+  return true;
+}
+
+// Steps 1-3 for one pose (any pose): the branches' verified principal solutions and the pose's
+// info.
+inline void solve_branches(const Plan& plan, const TargetFrames& frames, const double* T,
+                           const Joints& seed, double tolerance, Branches& branches,
+                           PoseInfo& info) {
+  tolerance = plan.verification_tolerance(tolerance);
+  PoseTargets targets;
+  if (!begin_pose(frames, T, seed, info, branches, targets)) return;
+  const Frame& T_dh = targets.T_dh;
+  const Frame& T_at = targets.T_at;
+  const double clamp = plan.clamp(tolerance);
+  Regular regular;
+  {
+    Candidates found;
+    plan.solve_family(T_dh, seed, 0, clamp, found);
+    info.why = found.why;
+    regular.q = found.q, regular.valid = found.valid, regular.flags = found.flags;
+    regular.near = found.near;
+  }
+  branches.q = regular.q;
+  branches.flags = regular.flags;
+  int wanted = 0;
+  for (int b = 0; b < kBranches; ++b) wanted |= regular.near[b] & kFree;
+  Candidates seeded;
+  if (wanted != 0) plan.solve_family(T_dh, seed, wanted, clamp, seeded);
+  double best_position = INFINITY, best_rotation = INFINITY;
+  std::array<bool, kBranches> seeded_wrist{}, released{}, member{}, unclamped{}, raw_ok{};
+  std::array<std::uint8_t, kBranches> seeded_flags = seeded.flags;
+  Extras extras;
+  // which seeded candidates verify as computed (wrapped, neither refined nor polished)
+  if (wanted != 0 && !plan.refine) {
+    for (int b = 0; b < kBranches; ++b) {
+      if (seeded.valid[b] && (seeded.near[b] & wanted) != 0 && finite(seeded.q[b])) {
+        raw_ok[b] = check(plan.chain, seeded.q[b].data(), T_at).within(tolerance);
+      }
+    }
+  }
+  Joints candidate{};
+  JointMask fixed{};
+  for (int b = 0; b < kBranches; ++b) {
+    bool tried = false;
+    const int bits = seeded.near[b] & wanted;
+    if (bits != 0 && seeded.valid[b]) {
+      tried = true;
+      candidate = seeded.q[b];
+      if (bits & (kShoulder | kElbow)) {
+        const int member_flags = nearest_member(plan, T_dh, seed, bits, b, clamp, candidate);
+        if (member_flags >= 0) seeded_flags[b] = static_cast<std::uint8_t>(member_flags);
+      }
+      fixed = plan.free_joints(bits);
+      // polished only when its wrist partner does not verify as computed either: where the
+      // partner does, the pose has picked the partner's side of the singular family and this
+      // candidate's miss is real (polishing would carry it onto the partner's member and hide the
+      // distinct flip, which the regular candidate then gives)
+      PoseError error = settle(plan, T_at, candidate, fixed, (seeded.near[b] & kClamped) != 0,
+                               false, tolerance, !raw_ok[b ^ 1]);
+      released[b] = !any(fixed);
+      if (!released[b] && error.within(tolerance) &&
+          !plan.in_limits(candidate, tolerance / plan.lever)) {
+        // the seed's member of the family lies outside the joint limits: the nearest member
+        // inside them (the free joint moved off the seed, nearest first)
+        const Joints kept = candidate;
+        error = member_in_limits(plan, T_dh, T_at, seed, bits, b, clamp, tolerance, candidate,
+                                 fixed);
+        if (!error.within(tolerance)) {
+          // none inside: the seed's member stands (the limits drop it later), not the regular
+          // candidates, which are other members of the same family
+          candidate = kept;
+          error = check(plan.chain, candidate.data(), T_at);
+        }
+      }
+      if (error.within(tolerance)) {
+        branches.q[b] = candidate;
+        branches.ok[b] = true;
+        branches.flags[b] = seeded_flags[b] | bits;
+        seeded_wrist[b] = (bits & kWrist) != 0;
+        member[b] = any(fixed);
+        branches.errors[b] = error;
+      } else {
+        best_position = std::min(best_position, error.position);
+        best_rotation = std::min(best_rotation, error.rotation);
+      }
+    }
+    const bool long_shot = !regular.valid[b] && plan.refine && finite(branches.q[b]) &&
+                           (regular.near[b] & kClamped) != 0;
+    if (branches.ok[b] && released[b] && regular.valid[b] && plan.refine) {
+      // the seeded candidate verified only with its free joint released: the exact chain is not
+      // singular here, and the regular candidate may reach another root of the pose (kept as an
+      // extra; the seeded root, the one nearest the seed, stays)
+      const PoseError error = settle_free(plan, T_at, regular.q[b], candidate, fixed,
+                                          (regular.near[b] & kClamped) != 0, false, tolerance);
+      if (error.within(tolerance)) {
+        extras.q[b] = candidate;
+        extras.ok[b] = true;
+      }
+    }
+    if (!branches.ok[b] && (regular.valid[b] || long_shot)) {
+      tried = tried || regular.valid[b];
+      const Joints start = branches.q[b];
+      const PoseError error = settle_free(plan, T_at, start, candidate, fixed,
+                                          (regular.near[b] & kClamped) != 0, long_shot, tolerance);
+      if (error.within(tolerance)) {
+        tried = true;
+        branches.q[b] = candidate;
+        branches.ok[b] = true;
+        branches.errors[b] = error;
+      } else {
+        best_position = std::min(best_position, error.position);
+        best_rotation = std::min(best_rotation, error.rotation);
+      }
+    }
+    if (tried) {
+      ++info.candidates;
+      unclamped[b] = (regular.valid[b] && (regular.near[b] & kClamped) == 0) ||
+                     (bits != 0 && seeded.valid[b] && (seeded.near[b] & kClamped) == 0);
+    }
+  }
+  // the two wrist branches of an arm branch that both took the seed's wrist and landed on the
+  // same member of the family (they differ by 2 |q5| <= 2 kFlagBand): one solution (on a refined
+  // table the seeded candidates were refined; duplicates merge below)
+  for (int b = 0; b < kBranches; b += 2) {
+    if (plan.refine || !branches.ok[b] || !branches.ok[b + 1] || !seeded_wrist[b] ||
+        !seeded_wrist[b + 1] || !plan.same(branches.q[b], branches.q[b + 1], 4.0 * kFlagBand)) {
+      continue;
+    }
+    const int better =
+        branches.errors[b].largest() <= branches.errors[b + 1].largest() ? b : b + 1;
+    const int worse = b + b + 1 - better;
+    branches.ok[worse] = false;
+    if (family_free(plan, T_dh, T_at, branches.q[better], better, clamp, tolerance)) {
+      continue;  // one family at the tolerance: one solution
+    }
+    // singular to within the seed band but not to within the tolerance over half a turn of the
+    // family: the flip is a distinct solution, the regular candidate's
+    if (regular.valid[worse]) {
+      const PoseError error = settle_free(plan, T_at, regular.q[worse], candidate, fixed,
+                                          (regular.near[worse] & kClamped) != 0, false, tolerance);
+      if (error.within(tolerance) && !branches.known(plan, candidate)) {
+        branches.q[worse] = candidate;
+        branches.ok[worse] = true;
+        branches.flags[worse] = regular.flags[worse];
+        branches.errors[worse] = error;
+      }
+    }
+  }
+  merge_duplicates(plan, T_at, seed, tolerance, member, branches);
+  // a second root found by a branch goes to its own slot when a merge emptied that (its seeded
+  // root was another branch's), else to its wrist twin's when that has none
+  place_extras(plan, T_at, extras, regular.flags, branches, 2);
+  if (plan.refine) {
+    retry_corrected(plan, T_dh, T_at, seed, clamp, tolerance, regular, branches);
+    // a root still without a slot takes the nearest empty one (elbow, then shoulder partners):
+    // near a singularity the exact chain can have more roots for one ideal branch than the ideal
+    // model has, while another branch's candidates found none
+    place_extras(plan, T_at, extras, regular.flags, branches, kBranches);
+    seed_root(plan, T_at, seed, tolerance, branches);
+  }
+  // flags describe the solution returned: wrist and elbow from its joint values, shoulder from
+  // the pose (where the two q1 roots meet depends on the pose alone)
+  for (int b = 0; b < kBranches; ++b) {
+    if (branches.ok[b]) {
+      branches.flags[b] = (regular.flags[b] & kShoulder) | plan.value_flags(branches.q[b]);
+      ++info.verified;
+    } else if (unclamped[b] && !branches.ok[b ^ 1]) {
+      // dropped: a solution of the ideal model (not a clamped start) that did not settle, on a
+      // wrist pair that answered nothing (one answer for a singular pair is by design)
+      ++info.dropped;
+    }
+  }
+  info.best_position = best_position, info.best_rotation = best_rotation;
+}
+
+// Steps 1-3 for one pose: the direct path, else the pipeline.
+inline void solve_pose(const Plan& plan, const TargetFrames& frames, const double* T,
+                       const Joints& seed, double tolerance, Branches& branches, PoseInfo& info) {
+  if (!direct_branches(plan, frames, T, seed, tolerance, branches, info)) {
+    solve_branches(plan, frames, T, seed, tolerance, branches, info);
+  }
+}
+
+}  // namespace dhkin

@@ -1,0 +1,86 @@
+// Step 3 of the pipeline for one candidate: wrap it, refine it on the exact chain (Newton, then
+// continuation where that fails) or polish an exact table's candidate, and measure its errors.
+#pragma once
+
+#include "dhkin/continuation.hpp"
+#include "dhkin/newton.hpp"
+#include "dhkin/plan.hpp"
+
+namespace dhkin {
+
+inline bool any(const JointMask& mask) {
+  for (bool m : mask) {
+    if (m) return true;
+  }
+  return false;
+}
+
+// Wrap a candidate's revolute values, refine it on the exact chain if the plan says so (joints
+// marked `fixed` keep their value; a candidate that is an exact solution of the ideal model, not
+// `clamped`, is followed by continuation where Newton fails), or polish it by Newton where an
+// exact table's candidate does not verify (when `polish`); return its errors. `fixed` is cleared
+// when the seed's choice of a free joint had to be released.
+inline PoseError settle(const Plan& plan, const Frame& target, Joints& values, JointMask& fixed,
+                        bool clamped, bool long_shot, double tolerance, bool polish = true) {
+  const Chain& chain = plan.chain;
+  plan.wrap_revolute(values);
+  if (plan.refine) {
+    const Joints start = values;
+    const int budget = long_shot ? kLongShotBudget : newton::kBudget;
+    PoseError error = refine(chain, target, values, fixed, tolerance, {budget, newton::kGrowth, 0.0});
+    if (any(fixed) && !error.within(tolerance)) {
+      // the exact chain is not singular here (its singular set is shifted, or a calibration
+      // leaves none): the seed's choice of the free joint is not exact, so release it from where
+      // it got to (the caller sees `fixed` cleared)
+      fixed = JointMask{};
+      // a monotone descent first: it stays in the basin of the root nearest the seed's member,
+      // where Newton's first step can jump along the near-singular direction to a far root
+      const Joints held = values;
+      error = refine(chain, target, values, fixed, tolerance, {budget, newton::kMonotone, 0.0});
+      if (!error.within(tolerance)) {
+        values = held;
+        error = refine(chain, target, values, fixed, tolerance, {budget, newton::kGrowth, 0.0});
+      }
+    }
+    if (!clamped && !error.within(tolerance)) {  // follow the branch from the ideal model
+      values = start;
+      refine_along(plan.ideal, chain, plan.path, target, values, fixed, tolerance);
+    } else if (clamped && !error.within(tolerance)) {
+      // a target a hair beyond a fold: its least-squares point may verify
+      refine(chain, target, values, fixed, tolerance, {kPolishBudget, newton::kMonotone, 0.0});
+    }
+    plan.wrap_revolute(values);
+    return check(chain, values.data(), target);
+  }
+  PoseError error = check(chain, values.data(), target);
+  if (!error.within(tolerance) && polish) {
+    // a clamped or near-singular candidate of an exact table: the closed form's point is not the
+    // best one the chain reaches; Newton's is, and verification decides
+    refine(chain, target, values, fixed, tolerance, {kPolishBudget, newton::kGrowth, 0.0});
+    error = check(chain, values.data(), target);
+    if (clamped && !error.within(tolerance)) {
+      // clamped onto a fold: J is singular there. A target a hair beyond it: Newton oscillates
+      // along the fold's weak direction, a monotone descent reaches the least-squares point,
+      // which may verify; a target a hair inside it: the roots lie a hair off the fold
+      refine(chain, target, values, fixed, tolerance, {kPolishBudget, newton::kMonotone, 0.0});
+      error = check(chain, values.data(), target);
+      if (!error.within(tolerance)) {
+        off_fold(chain, target, values, fixed, tolerance, kPolishBudget);
+      }
+    }
+    plan.wrap_revolute(values);
+    error = check(chain, values.data(), target);
+  }
+  return error;
+}
+
+// settle() of `start` copied into `candidate` with every joint free.
+inline PoseError settle_free(const Plan& plan, const Frame& target, const Joints& start,
+                             Joints& candidate, JointMask& fixed, bool clamped, bool long_shot,
+                             double tolerance) {
+  candidate = start;
+  fixed = JointMask{};
+  return settle(plan, target, candidate, fixed, clamped, long_shot, tolerance, true);
+}
+
+}  // namespace dhkin

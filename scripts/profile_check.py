@@ -15,9 +15,11 @@ kind of work and prints, per robot and in all, the seconds of each check (the co
 * ``other``: the rest of each check (Python bookkeeping of the validation, xacro and the URDF
   validators, ...).
 
-A timer counts its time once: the outermost ``ik`` call owns everything inside it; other
-categories nest exclusively (a Pinocchio call inside the guard counts as Pinocchio). The timers
-cost about a microsecond per call, so figures are within a few per cent of a plain run.
+The timers measure wall time; on a machine shared with other jobs compare the CPU time printed
+beside the wall time (this process, all threads). A timer counts its time once: the outermost
+``ik`` call owns everything inside it; other categories nest exclusively (a Pinocchio call
+inside the guard counts as Pinocchio). The timers cost about a microsecond per call, so figures
+are within a few per cent of a plain run.
 
 Usage: python scripts/profile_check.py [ROBOT ...] [--ik-poses N] [--vendor-poses N]
 (no ROBOT: every built-in robot). Run on an otherwise idle machine; say how loaded it was.
@@ -109,11 +111,11 @@ def main(argv: list[str] | None = None) -> int:
     install()
     command = ["check", *(args.robots or ["--all"]), "--ik-poses", args.ik_poses,
                "--vendor-poses", args.vendor_poses]
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.process_time()
     output = io.StringIO()
     with redirect_stdout(output):
         status = dhkin_main(command)
-    wall = time.perf_counter() - started
+    wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
     print(output.getvalue())
     by_column: dict[str, dict[str, float]] = defaultdict(lambda: defaultdict(float))
     by_robot: dict[str, dict[str, float]] = {}
@@ -127,7 +129,8 @@ def main(argv: list[str] | None = None) -> int:
     for by_category in by_column.values():
         for category, value in by_category.items():
             total[category] += value
-    print(f"dhkin {' '.join(command)}: {wall:.1f} s wall, {os.cpu_count()} CPUs, load average "
+    print(f"dhkin {' '.join(command)}: {wall:.1f} s wall, {cpu:.1f} s CPU (this process, all "
+          f"threads), {os.cpu_count()} CPUs, load average "
           f"{' '.join(f'{x:.2f}' for x in os.getloadavg())} at the end")
     print(table(by_column, "by check"))
     print(table({"all checks": total}, ""))

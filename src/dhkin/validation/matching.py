@@ -8,7 +8,7 @@ joints); a distance is the largest joint difference, revolute joints wrapped to 
 
 from __future__ import annotations
 
-from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,16 +26,21 @@ WRIST_SINGULAR = 1e-6
 SINGULAR_FAMILY_FIXED_JOINTS = (0, 4)
 
 
-@lru_cache(maxsize=256)
-def _mask(revolute: tuple[bool, ...]) -> NDArray[np.bool_]:
-    mask = np.array(revolute, dtype=bool)
-    mask.flags.writeable = False
-    return mask
+#: id(joints tuple) -> (that tuple, kept so that its id is not reused; its revolute mask).
+_MASKS: dict[int, tuple[tuple[Any, ...], NDArray[np.bool_]]] = {}
 
 
 def revolute_mask(robot: Arm) -> NDArray[np.bool_]:
-    """Which joints are revolute (a read-only array, one per joint type pattern)."""
-    return _mask(tuple(j.is_revolute for j in robot.table.joints))
+    """Which joints are revolute (read-only; computed once per table's joints)."""
+    joints = robot.table.joints
+    known = _MASKS.get(id(joints))
+    if known is None or known[0] is not joints:
+        mask = np.array([j.is_revolute for j in joints], dtype=bool)
+        mask.flags.writeable = False
+        if len(_MASKS) >= 256:  # a long session of many tables: start again
+            _MASKS.clear()
+        known = _MASKS[id(joints)] = (joints, mask)
+    return known[1]
 
 
 def wrap(robot: Arm, difference: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -6,9 +6,12 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
 
+#include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -263,54 +266,98 @@ Output<T> new_array(std::initializer_list<std::size_t> shape) {
   return Output<T>(data, shape.size(), shape.begin(), owner);
 }
 
-// The per-pose info as the tuple dhkin.ik.solver reads: (status, projection, candidates,
-// verified, dropped, best_position, best_rotation, why).
-nb::tuple info_tuple(const dhkin::PoseInfo& info) {
-  auto why = new_array<double>({dhkin::kWhySize});
-  for (int k = 0; k < dhkin::kWhySize; ++k) why.data()[k] = info.why[k];
-  return nb::make_tuple(info.status, info.projection, info.candidates, info.verified,
-                        info.dropped, info.best_position, info.best_rotation, why);
-}
+// One pose's answer: its solutions (at most eight inline, more with every 2pi copy) and what
+// happened to the pose; dhkin.ik.result.IKSolutions reads its arrays when they are asked for.
+class Answer {
+ public:
+  std::vector<dhkin::Solution> solutions;
+  dhkin::PoseInfo info;
+  dhkin::JointMask revolute{};
+
+  std::size_t count() const { return solutions.size(); }
+
+  Output<double> q() const {
+    auto out = new_array<double>({count(), static_cast<std::size_t>(kDof)});
+    for (std::size_t i = 0; i < count(); ++i) {
+      for (int j = 0; j < kDof; ++j) out.data()[kDof * i + j] = solutions[i].q[j];
+    }
+    return out;
+  }
+
+  Output<std::int16_t> branch() const {
+    auto out = new_array<std::int16_t>({count()});
+    for (std::size_t i = 0; i < count(); ++i) out.data()[i] = static_cast<std::int16_t>(solutions[i].branch);
+    return out;
+  }
+
+  Output<std::uint8_t> flags() const {
+    auto out = new_array<std::uint8_t>({count()});
+    for (std::size_t i = 0; i < count(); ++i) out.data()[i] = solutions[i].flags;
+    return out;
+  }
+
+  Output<double> residuals() const {
+    auto out = new_array<double>({count(), 2});
+    for (std::size_t i = 0; i < count(); ++i) {
+      out.data()[2 * i] = solutions[i].error.position;
+      out.data()[2 * i + 1] = solutions[i].error.rotation;
+    }
+    return out;
+  }
+
+  // round(q / 2pi) per revolute joint (0 for prismatic ones), as tuples of the solutions'
+  // branch index and turns: the key of a configuration.
+  nb::list configuration_keys() const {
+    nb::list out;
+    for (const dhkin::Solution& s : solutions) {
+      nb::tuple turns = nb::steal<nb::tuple>(PyTuple_New(kDof));
+      for (int j = 0; j < kDof; ++j) {
+        const long turn = revolute[j] ? static_cast<long>(std::nearbyint(s.q[j] / dhkin::kTwoPi)) : 0;
+        PyTuple_SET_ITEM(turns.ptr(), j, PyLong_FromLong(turn));
+      }
+      out.append(nb::make_tuple(s.branch, turns));
+    }
+    return out;
+  }
+
+  Output<double> why() const {
+    auto out = new_array<double>({static_cast<std::size_t>(dhkin::kWhySize)});
+    for (int k = 0; k < dhkin::kWhySize; ++k) out.data()[k] = info.why[k];
+    return out;
+  }
+};
 
 class ClosedForm {
  public:
   ClosedForm(const nb::dict& plan, Input<double, nb::shape<2, 4, 4>> frames)
       : solver_(make_plan(plan), target_frames(frames)) {}
 
-  // One pose: (q (k, 6), branch (k,), flags (k,), errors (k, 2), info tuple).
-  nb::tuple solve_one(Input<double, nb::shape<4, 4>> T, Input<double, nb::shape<kDof>> seed,
-                      double tolerance, Input<double, nb::shape<2, 4, 4>> frames, bool copies) {
-    const dhkin::TargetFrames targets = target_frames(frames);
+  // One pose (4 x 4, base_link -> tool0, or -> the TCP of `frames`): its Answer. Without a
+  // seed the seed is zero; without frames, the table's own base and tool.
+  Answer solve(Input<double, nb::shape<4, 4>> T, std::optional<Input<double, nb::shape<kDof>>> seed,
+               double tolerance, std::optional<Input<double, nb::shape<2, 4, 4>>> frames,
+               bool copies) const {
+    const dhkin::TargetFrames targets =
+        frames ? target_frames(*frames) : solver_.default_frames();
     dhkin::Plan storage;
     const dhkin::Plan& plan = solver_.plan_for(targets, storage);
-    const Joints seed_q = joints_of(seed.data());
+    const Joints seed_q = seed ? joints_of(seed->data()) : Joints{};
+    Answer answer;
+    for (int j = 0; j < kDof; ++j) answer.revolute[j] = plan.revolute(j);
     dhkin::Branches branches;
-    dhkin::PoseInfo info;
-    std::vector<dhkin::Solution> solutions;
     {
       nb::gil_scoped_release release;
-      dhkin::solve_pose(plan, targets, T.data(), seed_q, tolerance, branches, info);
-      if (info.status == dhkin::kUsable) {
+      dhkin::solve_pose(plan, targets, T.data(), seed_q, tolerance, branches, answer.info);
+      if (answer.info.status == dhkin::kUsable) {
+        answer.solutions.reserve(kBranches);
         dhkin::expand(plan, targets, T.data(), seed_q, tolerance, copies, branches,
                       [&](const dhkin::Solution& s) {
-                        solutions.push_back(s);
+                        answer.solutions.push_back(s);
                         return true;
                       });
       }
     }
-    const std::size_t k = solutions.size();
-    auto q = new_array<double>({k, static_cast<std::size_t>(kDof)});
-    auto branch = new_array<std::int16_t>({k});
-    auto flags = new_array<std::uint8_t>({k});
-    auto errors = new_array<double>({k, 2});
-    for (std::size_t i = 0; i < k; ++i) {
-      for (int j = 0; j < kDof; ++j) q.data()[kDof * i + j] = solutions[i].q[j];
-      branch.data()[i] = static_cast<std::int16_t>(solutions[i].branch);
-      flags.data()[i] = solutions[i].flags;
-      errors.data()[2 * i] = solutions[i].error.position;
-      errors.data()[2 * i + 1] = solutions[i].error.rotation;
-    }
-    return nb::make_tuple(q, branch, flags, errors, info_tuple(info));
+    return answer;
   }
 
   // Steps 1-3 of N poses into q (N, 8, 6), ok, flags (N, 8), errors (N, 8, 2), totals (N, 8)
@@ -518,6 +565,33 @@ NB_MODULE(_core, m) {
         },
         "T"_a, "(T with its rotation block projected onto the nearest rotation, Frobenius norm of the change).");
 
+  // The elementary functions of the core, elementwise, for the tests to measure (angles.hpp).
+  m.def("sincos",
+        [](Input<double, nb::ndim<1>> x) {
+          auto out = new_array<double>({x.shape(0), 2});
+          for (std::size_t i = 0; i < x.shape(0); ++i) {
+            const dhkin::SinCos t = dhkin::sincos(x(i));
+            out.data()[2 * i] = t.s, out.data()[2 * i + 1] = t.c;
+          }
+          return out;
+        },
+        "x"_a, "(sin x, cos x) per element (N, 2).");
+  m.def("atan2",
+        [](Input<double, nb::ndim<1>> y, Input<double, nb::ndim<1>> x) {
+          if (y.shape(0) != x.shape(0)) throw std::invalid_argument("atan2: y and x differ in length");
+          auto out = new_array<double>({x.shape(0)});
+          for (std::size_t i = 0; i < x.shape(0); ++i) out.data()[i] = dhkin::atan2(y(i), x(i));
+          return out;
+        },
+        "y"_a, "x"_a, "atan2(y, x) per element.");
+  m.def("wrap",
+        [](Input<double, nb::ndim<1>> x) {
+          auto out = new_array<double>({x.shape(0)});
+          for (std::size_t i = 0; i < x.shape(0); ++i) out.data()[i] = dhkin::wrap(x(i));
+          return out;
+        },
+        "x"_a, "x wrapped to (-pi, pi] per element.");
+
   nb::class_<ChainModel>(m, "Chain")
       .def(nb::init<Input<double, nb::shape<-1, 4, 4>>, Input<bool, nb::ndim<1>>,
                     Input<double, nb::ndim<1>>, Input<double, nb::ndim<1>>,
@@ -526,10 +600,26 @@ NB_MODULE(_core, m) {
       .def_prop_ro("dof", &ChainModel::dof)
       .def("fk", &ChainModel::fk, "q"_a, "out"_a);
 
+  nb::class_<Answer>(m, "Answer")
+      .def_prop_ro("count", &Answer::count)
+      .def_prop_ro("status", [](const Answer& a) { return a.info.status; })
+      .def_prop_ro("projection", [](const Answer& a) { return a.info.projection; })
+      .def_prop_ro("candidates", [](const Answer& a) { return a.info.candidates; })
+      .def_prop_ro("verified", [](const Answer& a) { return a.info.verified; })
+      .def_prop_ro("dropped", [](const Answer& a) { return a.info.dropped; })
+      .def_prop_ro("best_position", [](const Answer& a) { return a.info.best_position; })
+      .def_prop_ro("best_rotation", [](const Answer& a) { return a.info.best_rotation; })
+      .def("q", &Answer::q)
+      .def("branch", &Answer::branch)
+      .def("flags", &Answer::flags)
+      .def("residuals", &Answer::residuals)
+      .def("configuration_keys", &Answer::configuration_keys)
+      .def("why", &Answer::why);
+
   nb::class_<ClosedForm>(m, "ClosedForm")
       .def(nb::init<const nb::dict&, Input<double, nb::shape<2, 4, 4>>>(), "plan"_a, "frames"_a)
-      .def("solve_one", &ClosedForm::solve_one, "T"_a, "seed"_a, "tolerance"_a, "frames"_a,
-           "copies"_a)
+      .def("solve", &ClosedForm::solve, "T"_a, "seed"_a.none(), "tolerance"_a,
+           "frames"_a.none(), "copies"_a)
       .def("principal", &ClosedForm::principal, "targets"_a, "seeds"_a, "tolerance"_a,
            "frames"_a, "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "totals"_a, "why"_a,
            "info"_a, "direct"_a = true)

@@ -416,7 +416,8 @@ URDF_FAULTS: dict[str, tuple[Callable[[str], str | bytes], str]] = {
                  r"Pinocchio cannot build a model \(Joint \[shoulder_pan_joint\] is of type "
                  r"REVOLUTE but it does not specify limits\)"),
     "bad number": (lambda t: t.replace("lower=\"-6.283185307179586\"", "lower=\"abc\"", 1),
-                   r"lower value \(abc\) is not a valid float"),
+                   r"joint 'shoulder_pan_joint' \(line \d+\) limit lower: expected a number, "
+                   r"got 'abc'"),
 }
 
 

@@ -17,11 +17,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from numba import njit
 
 import dhkin
+from dhkin import _core
 from dhkin.errors import InputError
-from dhkin.ik.compiled import elementary
 from dhkin.ik.result import flag_names
 from dhkin.ik.workers import POSES_PER_WORKER
 from dhkin.transforms import pose_error
@@ -166,19 +165,15 @@ def test_every_copy_inside_the_limits_and_no_other(robot):
 
 
 # --------------------------------------------------------------------------------------------
-# Elementary functions of the kernels
+# Elementary functions of the compiled core (cpp/dhkin/angles.hpp)
 
 
-@njit(cache=False)
 def _sincos_array(x: np.ndarray, out: np.ndarray) -> None:
-    for i in range(x.shape[0]):
-        out[i, 0], out[i, 1] = elementary.sincos(x[i])
+    out[:] = _core.sincos(x)
 
 
-@njit(cache=False)
 def _atan2_array(y: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
-    for i in range(x.shape[0]):
-        out[i] = elementary.atan2(y[i], x[i])
+    out[:] = _core.atan2(y, x)
 
 
 def test_sincos_within_a_few_ulp_and_the_c_library_beyond_its_range():
@@ -212,6 +207,21 @@ def test_atan2_within_a_few_ulp_and_exact_at_zeros_and_infinities():
     _atan2_array(ys, xs, out)
     np.testing.assert_array_equal(out, np.arctan2(ys, xs))
     assert np.signbit(out).tolist() == np.signbit(np.arctan2(ys, xs)).tolist()
+
+
+def test_wrap_to_minus_pi_exclusive_pi_inclusive():
+    """wrap(x) is x less whole turns, in (-pi, pi]: within a few ulp of the exact remainder
+    (numpy's, with -pi taken to pi) over +-20 rad, the turns' edges and beyond 2^19 rad."""
+    rng = np.random.default_rng(13)
+    x = np.concatenate([rng.uniform(-20, 20, 200_000), np.arange(-9, 10) * np.pi,
+                        np.nextafter(np.arange(-9, 10) * np.pi, np.inf),
+                        np.nextafter(np.arange(-9, 10) * np.pi, -np.inf), [1e6, -3e7, 1e300]])
+    out = _core.wrap(x)
+    reference = np.remainder(x + np.pi, 2 * np.pi) - np.pi
+    reference[reference == -np.pi] = np.pi
+    assert np.all((out > -np.pi) & (out <= np.pi))
+    difference = np.abs(np.remainder(out - reference + np.pi, 2 * np.pi) - np.pi)
+    assert np.all(difference <= 4 * np.spacing(np.maximum(np.abs(x), np.pi)))
 
 
 # --------------------------------------------------------------------------------------------

@@ -111,9 +111,18 @@ inline double atan2(double y, double x) {
   return std::copysign(a, y);
 }
 
-// value wrapped to (-pi, pi] (-pi itself becomes pi).
+// value wrapped to (-pi, pi] (-pi itself becomes pi): whole turns taken off by Cody and Waite's
+// reduction (k * 2pi's head is exact), beyond 2^19 by the C library's exact fmod.
 inline double wrap(double value) {
   if (-kPi < value && value <= kPi) return value;
+  if (std::abs(value) < elementary::kReductionLimit) {
+    using namespace elementary;
+    const double k = (value * (0.25 * kTwoOverPi) + kRounder) - kRounder;  // value / 2pi, rounded
+    double r = (value - k * (4.0 * kHalfPiHead)) - k * (4.0 * kHalfPiTail);  // 2pi = 4 (pi/2)
+    if (r <= -kPi) r += kTwoPi;
+    if (r > kPi) r -= kTwoPi;
+    return r;
+  }
   double r = std::fmod(kPi - value, kTwoPi);
   if (r < 0.0) r += kTwoPi;
   const double wrapped = kPi - r;

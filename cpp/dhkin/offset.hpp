@@ -131,39 +131,56 @@ struct ElbowRoot {
   std::uint8_t flag = 0, near = 0;
 };
 
-// Elbow branch e for the motion G of joints 2-4: the law of cosines for q3, the planar rotation
-// taking the bent arm onto the target for q2, the angle of G about n for q4.
-inline ElbowRoot elbow(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
-                       const Vec3& arm, double reach_side, double seed_q2,
-                       const FamilyRequest& request, int e) {
+// What both elbow branches of one motion G share: the law of cosines (q3 of each branch, in
+// branch order), the reach test and flags, and G's angle about n.
+struct ElbowSetup {
+  double q3[2] = {0.0, 0.0};
+  bool reach_ok = false, merged = false, clamped = false;
+  std::uint8_t flag = 0;
+  double total = 0.0;  // angle about n of G plane_x from plane_x
+};
+
+inline ElbowSetup elbow_setup(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
+                              const Vec3& arm, double reach_side, double clamp) {
   const double span = norm(arm);
   const double L2 = g.upper_length, L3 = g.forearm_length;
   const double low = std::abs(L2 - L3), high = L2 + L3;
   const double outer = high - span, inner = span - low;
-  ElbowRoot out;
-  const bool reach_ok = outer >= -request.clamp && inner >= -request.clamp;
+  ElbowSetup out;
+  out.reach_ok = outer >= -clamp && inner >= -clamp;
+  out.clamped = outer < 0.0 || inner < 0.0;
   // (L2 L3)^2 - kappa^2 in factored form: accurate near both boundaries
   double root = std::sqrt(std::max(outer, g.spread) * (high + span) * std::max(inner, g.spread) *
                           (span + low)) / 2.0;
   const double kappa = (span * span - L2 * L2 - L3 * L3) / 2.0;
-  const bool merged = atan2(root, std::abs(kappa)) <= kMergeAngle;
-  if (merged) root = 0.0;
-  out.flag = merged || root <= kFlagBand * L2 * L3 ? kElbow : 0;
+  out.merged = atan2(root, std::abs(kappa)) <= kMergeAngle;
+  if (out.merged) root = 0.0;
+  out.flag = out.merged || root <= kFlagBand * L2 * L3 ? kElbow : 0;
   const double half = atan2(root, kappa);
   double first = g.elbow_base + half, second = g.elbow_base - half;
   const SinCos f = sincos(first);
   const double turn = f.c * g.elbow_turn + g.sign3 * f.s * g.elbow_alpha;
   if ((turn >= 0.0 ? 1.0 : -1.0) != reach_side) std::swap(first, second);
-  out.q3 = e == 0 ? first : second;
+  out.q3[0] = first, out.q3[1] = second;
+  out.total = plane_angle(g, motion_apply(g, T_home, turns, g.plane_x, false));
+  return out;
+}
+
+// Elbow branch e: the planar rotation taking the bent arm onto the target for q2, the angle of G
+// about n for q4.
+inline ElbowRoot elbow(const OffsetGeometry& g, const ElbowSetup& setup, const Vec3& arm,
+                       double seed_q2, const FamilyRequest& request, int e) {
+  ElbowRoot out;
+  out.flag = setup.flag;
+  out.q3 = setup.q3[e];
   const SinCos t3 = sincos(out.q3);
-  const double total = plane_angle(g, motion_apply(g, T_home, turns, g.plane_x, false));
   const Vec3 bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
   out.near = norm(bent) <= request.seed_length ? kElbow : 0;
   const bool seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
-  if (outer < 0.0 || inner < 0.0) out.near |= kClamped;
+  if (setup.clamped) out.near |= kClamped;
   out.q2 = seeded ? seed_q2 : atan2(dot(g.n, cross(bent, arm)), dot(bent, arm));
-  out.q4 = g.sign4 * (total - out.q2 - g.sign3 * out.q3);
-  out.valid = reach_ok && (e == 0 || !merged);
+  out.q4 = g.sign4 * (setup.total - out.q2 - g.sign3 * out.q3);
+  out.valid = setup.reach_ok && (e == 0 || !setup.merged);
   return out;
 }
 
@@ -188,7 +205,8 @@ inline Member member(const OffsetGeometry& g, const Frame& T_home, const SinCos&
     turns.q6 = sincos(-t);
     arm = arm_point(g, T_home, turns);
   }
-  const ElbowRoot root = elbow(g, T_home, turns, arm, reach_side, seed[1], request, e);
+  const ElbowSetup setup = elbow_setup(g, T_home, turns, arm, reach_side, request.clamp);
+  const ElbowRoot root = elbow(g, setup, arm, seed[1], request, e);
   Member out;
   out.q2 = root.q2, out.q3 = root.q3, out.q4 = root.q4, out.q6 = t;
   const double a = wrap(root.q2 - seed[1]), b = wrap(root.q3 - seed[2]),
@@ -336,8 +354,9 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const Frame& T,
       out.why[2 + 2 * s + w] = norm(arm);
       // the two wrist roots coincide exactly: one solution
       const bool wrist_valid = w == 0 || wrist_seeded || sine != 0.0;
+      const ElbowSetup setup = elbow_setup(g, T_home, turns, arm, reach_side, request.clamp);
       for (int e = 0; e < 2; ++e) {
-        const ElbowRoot r = elbow(g, T_home, turns, arm, reach_side, seed[1], request, e);
+        const ElbowRoot r = elbow(g, setup, arm, seed[1], request, e);
         const int b = 4 * s + 2 * e + w;
         out.q[b] = {q1, r.q2, r.q3, r.q4, q5, q6};
         out.valid[b] = q1_valid && wrist_valid && r.valid;

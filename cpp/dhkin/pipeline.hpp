@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dhkin/direct.hpp"
 #include "dhkin/members.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
@@ -36,78 +37,6 @@
 #include "dhkin/settle.hpp"
 
 namespace dhkin {
-
-// A pose ready for the pipeline: its DH target, and the target of the TCP point (the chains of
-// the plan end at the TCP).
-struct PoseTargets {
-  Frame T_dh;  // DH frame 0 -> DH frame n
-  Frame T_at;  // T_dh followed by the TCP point: the target of the plan's chains
-};
-
-// Step 1: the pose and the seed checked (a rejection goes to info.status), the rotation
-// projected (info.projection) and the targets computed. False when the pose is not usable.
-inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints& seed,
-                       PoseInfo& info, Branches& branches, PoseTargets& targets) {
-  info = PoseInfo{};
-  info.why.fill(NAN);
-  branches.ok.fill(false);
-  branches.flags.fill(0);
-  info.status = pose_status(T);
-  if (info.status != kUsable) return false;
-  for (double v : seed) {
-    if (!std::isfinite(v)) {
-      info.status = kBadSeed;
-      return false;
-    }
-  }
-  const Frame projected = projected_frame(T, info.projection);
-  targets.T_dh = frames.to_dh(projected);
-  targets.T_at = moved_to(targets.T_dh, frames.tcp_point);
-  return true;
-}
-
-// Steps 1-3 for a regular pose of an exact-family table; false (outputs undefined) for a pose
-// that needs the full pipeline. A rejected pose or seed is answered here (info.status).
-inline bool direct_branches(const Plan& plan, const TargetFrames& frames, const double* T,
-                            const Joints& seed, double tolerance, Branches& branches,
-                            PoseInfo& info) {
-  if (plan.refine) return false;
-  tolerance = plan.verification_tolerance(tolerance);
-  PoseTargets targets;
-  if (!begin_pose(frames, T, seed, info, branches, targets)) return true;
-  Candidates found;
-  plan.solve_family(targets.T_dh, seed, 0, plan.clamp(tolerance), found);
-  for (int b = 0; b < kBranches; ++b) {
-    if (found.near[b] & kFree) return false;  // a seeded candidate to try: the pipeline's step 2
-  }
-  info.why = found.why;
-  for (int b = 0; b < kBranches; ++b) {
-    if (!found.valid[b]) continue;
-    Joints candidate = found.q[b];
-    plan.wrap_revolute(candidate);
-    const PoseError error = check(plan.chain, candidate.data(), targets.T_at);
-    if (!error.within(tolerance)) return false;  // to be polished: the pipeline's step 3
-    branches.q[b] = candidate;
-    branches.ok[b] = true;
-    branches.errors[b] = error;
-    ++info.candidates;
-  }
-  for (int a = 0; a < kBranches; ++a) {
-    for (int b = a + 1; b < kBranches; ++b) {
-      if (branches.ok[a] && branches.ok[b] &&
-          plan.same(branches.q[a], branches.q[b], 2.0 * kMergeAngle)) {
-        return false;  // one solution from two branches: the pipeline merges them
-      }
-    }
-  }
-  for (int b = 0; b < kBranches; ++b) {
-    if (branches.ok[b]) {
-      branches.flags[b] = (found.flags[b] & kShoulder) | plan.value_flags(branches.q[b]);
-      ++info.verified;
-    }
-  }
-  return true;
-}
 
 // Steps 1-3 for one pose (any pose): the branches' verified principal solutions and the pose's
 // info.

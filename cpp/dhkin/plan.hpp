@@ -113,14 +113,14 @@ struct Plan {
   std::uint8_t value_flags(const Joints& q) const {
     std::uint8_t bits = 0;
     if (family == Family::offset_wrist) {
-      if (std::abs(std::sin(q[4] - offset.psi)) <= kFlagBand) bits |= kWrist;
-      if (std::abs(std::sin(q[2] - offset.elbow_base)) <= kFlagBand) bits |= kElbow;
+      if (std::abs(sincos(q[4] - offset.psi).s) <= kFlagBand) bits |= kWrist;
+      if (std::abs(sincos(q[2] - offset.elbow_base).s) <= kFlagBand) bits |= kElbow;
       return bits;
     }
     const SphericalGeometry& g = spherical;
-    if (std::abs(std::sin(g.wrist_directions[1] * q[4] + g.tilt)) <= kFlagBand) bits |= kWrist;
+    if (std::abs(sincos(g.wrist_directions[1] * q[4] + g.tilt).s) <= kFlagBand) bits |= kWrist;
     if (family == Family::spherical_wrist) {
-      if (std::abs(std::sin(g.signs[2] * q[2] + g.bend_at_zero)) <= kFlagBand) bits |= kElbow;
+      if (std::abs(sincos(g.signs[2] * q[2] + g.bend_at_zero).s) <= kFlagBand) bits |= kElbow;
     } else if (std::abs(g.signs[2] * q[2] + g.slide_along) <= kFlagBand * g.scale) {
       bits |= kElbow;
     }

@@ -21,6 +21,7 @@ verdict, while :attr:`CompareReport.strict_ok` also requires equal joints.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -230,10 +231,12 @@ def _refuse_mimic_joints(other: Reference, base_frame: str, tip: str) -> None:
 def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base_link",
                       tip: str = "tool0", robot_tip: str = "tool0", n: int = 1000, seed: int = 0,
                       tolerance: float = DEFAULT_TOLERANCE,
-                      limit_tolerance: float = LIMIT_TOLERANCE) -> CompareReport:
+                      limit_tolerance: float = LIMIT_TOLERANCE,
+                      packages: Mapping[str, str | Path] | None = None) -> CompareReport:
     """Compare ``robot`` (base_link -> robot_tip) with ``urdf_path`` (base_frame -> tip): poses
     over ``n`` joint vectors (``tolerance``, m and rad) and the chain joints' names, types,
-    limits and velocities (``limit_tolerance``)."""
+    limits and velocities (``limit_tolerance``). A xacro file is expanded (``packages``:
+    {NAME: folder} for its ``$(find NAME)``, see :mod:`dhkin.ros_packages`)."""
     n = check_integer(n, "n", 1)
     seed = check_integer(seed, "seed", 0)
     tolerance = check_tolerance(tolerance)
@@ -243,7 +246,7 @@ def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base
                          f"{limit_tolerance!r}", field="limit_tolerance", value=limit_tolerance,
                          expected="a finite number >= 0")
     path = Path(urdf_path)
-    other = Reference(read_urdf_file(path), tip=tip, base=base_frame, source=str(path))
+    other = Reference(read_urdf_file(path, packages), tip=tip, base=base_frame, source=str(path))
     _refuse_mimic_joints(other, base_frame, tip)
     ours = robot.reference(tip=robot_tip)
     if other.dof != robot.dof:

@@ -6,8 +6,9 @@ base_link -> tool0 4x4 transforms in metres.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,8 +35,12 @@ LABEL_WORDS: dict[str, tuple[str, str]] = {"shoulder": ("lefty", "righty"), "elb
 
 
 def flag_names(bits: int) -> frozenset[str]:
-    """Bit mask -> names among {"wrist", "elbow", "shoulder"}."""
+    """Bit mask -> names among {"wrist", "elbow", "shoulder", "singular"}."""
     return frozenset(name for bit, name in FLAG_NAMES.items() if int(bits) & bit)
+
+
+#: The flag names of every bit mask (shared frozensets).
+FLAG_SETS: tuple[frozenset[str], ...] = tuple(flag_names(bits) for bits in range(16))
 
 
 @dataclass(frozen=True)
@@ -56,7 +61,6 @@ class Configuration:
         return " ".join(parts)
 
 
-@dataclass(frozen=True)
 class IKSolutions:
     """Every IK solution of one pose within the joint limits, each verified by FK.
 
@@ -66,20 +70,106 @@ class IKSolutions:
     solver. ``projection``: how far the input's rotation block was moved onto the nearest
     rotation (Frobenius norm; the solutions are exact for the projected pose). ``dropped``:
     branches whose candidate did not converge or verify on the exact chain (never returned).
+
+    Read-only. A closed-form answer keeps the compiled core's arrays and builds ``q``,
+    ``configurations``, ``flags`` and ``residuals`` when they are first read.
     """
 
-    q: NDArray[np.float64]
-    configurations: tuple[Configuration, ...] = ()
-    flags: tuple[frozenset[str], ...] = ()
-    residuals: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
-    reason: str = ""
-    family: str = ""
-    numerical: bool = False
-    projection: float = 0.0
-    dropped: int = 0
+    __slots__ = (
+        "_answer",
+        "_configurations",
+        "_configure",
+        "_dropped",
+        "_family",
+        "_flags",
+        "_numerical",
+        "_projection",
+        "_q",
+        "_reason",
+        "_residuals",
+    )
+
+    def __init__(self, q: NDArray[np.float64],
+                 configurations: tuple[Configuration, ...] = (),
+                 flags: tuple[frozenset[str], ...] = (),
+                 residuals: NDArray[np.float64] | None = None, reason: str = "",
+                 family: str = "", numerical: bool = False, projection: float = 0.0,
+                 dropped: int = 0) -> None:
+        self._q: NDArray[np.float64] | None = q
+        self._configurations: tuple[Configuration, ...] | None = configurations
+        self._flags: tuple[frozenset[str], ...] | None = flags
+        self._residuals: NDArray[np.float64] | None = (np.zeros((0, 2)) if residuals is None
+                                                       else residuals)
+        self._reason, self._family, self._numerical = reason, family, numerical
+        self._projection, self._dropped = projection, dropped
+        self._answer: Any = None
+        self._configure: Callable[[int, tuple[int, ...]], Configuration] | None = None
+
+    @classmethod
+    def from_core(cls, answer: Any, family: str,
+                  configure: Callable[[int, tuple[int, ...]], Configuration]) -> IKSolutions:
+        """The solutions of the compiled core's ``Answer`` (dhkin._core), read when asked for;
+        ``configure(branch, turns)`` gives a solution's Configuration."""
+        result = cls.__new__(cls)
+        result._answer, result._configure = answer, configure
+        result._q = result._configurations = result._flags = result._residuals = None
+        result._reason, result._family, result._numerical = "", family, False
+        result._projection, result._dropped = answer.projection, answer.dropped
+        return result
+
+    @property
+    def q(self) -> NDArray[np.float64]:
+        if self._q is None:
+            self._q = self._answer.q()
+        assert self._q is not None
+        return self._q
+
+    @property
+    def configurations(self) -> tuple[Configuration, ...]:
+        if self._configurations is None:
+            assert self._configure is not None
+            configure = self._configure
+            self._configurations = tuple(configure(branch, turns) for branch, turns
+                                         in self._answer.configuration_keys())
+        return self._configurations
+
+    @property
+    def flags(self) -> tuple[frozenset[str], ...]:
+        if self._flags is None:
+            self._flags = tuple(FLAG_SETS[bits] for bits in self._answer.flags().tolist())
+        return self._flags
+
+    @property
+    def residuals(self) -> NDArray[np.float64]:
+        if self._residuals is None:
+            self._residuals = self._answer.residuals()
+        assert self._residuals is not None
+        return self._residuals
+
+    @property
+    def reason(self) -> str:
+        return self._reason
+
+    @property
+    def family(self) -> str:
+        return self._family
+
+    @property
+    def numerical(self) -> bool:
+        return self._numerical
+
+    @property
+    def projection(self) -> float:
+        return self._projection
+
+    @property
+    def dropped(self) -> int:
+        return self._dropped
 
     def __len__(self) -> int:
-        return int(self.q.shape[0])
+        if self._q is None:
+            return int(self._answer.count)
+        return int(self._q.shape[0])
 
     def __iter__(self) -> Iterator[NDArray[np.float64]]:
         return iter(self.q)

@@ -15,6 +15,7 @@ the seed (nearest 0 without one); ``copies=True`` lists every in-limit copy.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Mapping
 from types import MappingProxyType
 from typing import Any
@@ -36,7 +37,7 @@ from dhkin.ik.inputs import (
     pose_error_message,
 )
 from dhkin.ik.plan import plan_fields
-from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions, flag_names
+from dhkin.ik.result import BranchSolutions, Configuration, IKBatch, IKSolutions
 from dhkin.ik.workers import _in_slices, check_workers
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert
@@ -47,10 +48,6 @@ DEFAULT_CHUNK = 65536
 
 #: solve_chunks' default chunks hold at most this much output (bytes).
 STREAM_BYTES = 64 * 2**20
-
-
-#: Singularity flag names of each bit mask.
-_FLAG_SETS: tuple[frozenset[str], ...] = tuple(flag_names(bits) for bits in range(8))
 
 
 class INFO:
@@ -134,6 +131,21 @@ class ClosedFormSolver:
                   tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
                   copies: bool = False) -> IKSolutions:
         """Every branch's solution of one pose (4, 4) (see the module docstring)."""
+        if (tcp is None and (copies is False or copies is True) and type(tolerance) is float
+                and 0.0 < tolerance < math.inf):
+            # the common call, straight to the core; anything it cannot take as it is (another
+            # shape, a list, NaN) goes through the checked path below, which says what is wrong
+            try:
+                answer = self.core.solve(T, q_seed, tolerance, None, copies)
+            except TypeError:
+                answer = None
+            if answer is not None and answer.status == 0:
+                return self._solutions(answer, tolerance)
+        return self._solve_checked(T, q_seed, tolerance, tcp, copies)
+
+    def _solve_checked(self, T: ArrayLike, q_seed: ArrayLike | None, tolerance: float,
+                       tcp: ArrayLike | None, copies: bool) -> IKSolutions:
+        """:meth:`solve_one` with every input checked (an InputError names the field)."""
         tolerance = check_tolerance(tolerance)
         copies = check_flag(copies, "copies")
         try:
@@ -144,25 +156,23 @@ class ClosedFormSolver:
             raise InputError(f"T: expected a (4, 4) pose, got shape {np.shape(T)}", field="T")
         seed = self._zero_seed if q_seed is None else self._seeds(q_seed, 1)[0]
         frames = self.frames if tcp is None else self.frames_for(tcp)
-        q, branch, flags, residuals, info = self.core.solve_one(target, seed, tolerance, frames,
-                                                                copies)
-        status, projection, candidates, verified, dropped, best_position, best_rotation, why \
-            = info
-        if status:
-            if status == STATUS_BAD_SEED:
+        answer = self.core.solve(target, seed, tolerance, frames, copies)
+        if answer.status:
+            if answer.status == STATUS_BAD_SEED:
                 raise InputError(field="q_seed", value=seed.tolist(),
                                  expected="finite values")
-            raise InputError(pose_error_message("T", target, status))
-        if len(q) == 0:
-            return IKSolutions(q=q, family=self.family, projection=projection, dropped=dropped,
-                               reason=self._reason(candidates, verified, best_position,
-                                                   best_rotation, why, tolerance))
-        turns = (np.rint(q * (1.0 / TWO_PI)) * self._revolute).astype(np.int64).tolist()
-        configurations = tuple(map(self._configuration, branch.tolist(), map(tuple, turns)))
-        return IKSolutions(q=q, configurations=configurations,
-                           flags=tuple(_FLAG_SETS[f] for f in flags.tolist()),
-                           residuals=residuals, family=self.family, projection=projection,
-                           dropped=dropped)
+            raise InputError(pose_error_message("T", target, answer.status))
+        return self._solutions(answer, tolerance)
+
+    def _solutions(self, answer: Any, tolerance: float) -> IKSolutions:
+        """The IKSolutions of a core ``Answer`` of a usable pose."""
+        if answer.count == 0:
+            return IKSolutions(q=np.zeros((0, self.dof)), family=self.family,
+                               projection=answer.projection, dropped=answer.dropped,
+                               reason=self._reason(answer.candidates, answer.verified,
+                                                   answer.best_position, answer.best_rotation,
+                                                   answer.why(), tolerance))
+        return IKSolutions.from_core(answer, self.family, self._configuration)
 
     def _configuration(self, branch: int, turns: tuple[int, ...]) -> Configuration:
         """The (shared) Configuration of a branch and its turns."""

@@ -255,9 +255,11 @@ def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray
 
 def _child_main(connection: Any, ik: Any, robot: Arm, limit: int) -> None:
     """The isolated child: say it is ready, then answer (T, q_seed) requests until told to stop
-    (None). Python's fault handler is off here: a crash is the parent's to report, as a failure
-    of the pose, not a stack dump on the terminal."""
+    (None). Python's fault handler is off here, and Ctrl-C ignored: a crash is the parent's to
+    report, as a failure of the pose, and an interrupt the parent's, not a stack dump on the
+    terminal."""
     faulthandler.disable()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to report, once
     declared = wanted(ik)
     connection.send(_READY)
     while True:

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.arm import Arm
+from dhkin.description import read_urdf_file
 from dhkin.errors import InputError, URDFError
 from dhkin.reference import Reference
 from dhkin.transforms import invert
@@ -182,10 +183,12 @@ class TargetModel:
 
 
 def target_model(robot: Arm, reference: str | Path | ReferenceSpec | None = None,
-                 base: str | None = None, tip: str | None = None) -> TargetModel:
+                 base: str | None = None, tip: str | None = None,
+                 packages: Mapping[str, str | Path] | None = None) -> TargetModel:
     """The Pinocchio model that makes the targets and checks the solutions (see
-    :func:`resolve_reference`). Bad files, frames or chains raise InputError naming
-    the argument."""
+    :func:`resolve_reference`; a xacro reference is expanded, ``packages`` giving the folders
+    of the ROS packages its ``$(find NAME)`` name: :mod:`dhkin.ros_packages`). Bad files,
+    frames or chains raise InputError naming the argument."""
     spec = resolve_reference(robot, reference, base, tip)
     if spec.kind == "exact":
         return TargetModel(spec, robot.reference())
@@ -195,10 +198,9 @@ def target_model(robot: Arm, reference: str | Path | ReferenceSpec | None = None
                                                                      f"(rounded)"))
     path = Path(spec.path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"reference (--reference): cannot read {str(path)!r} "
-                         f"({exc.strerror})", field="reference") from exc
+        text = read_urdf_file(path, packages)
+    except URDFError as exc:
+        raise InputError(f"reference (--reference): {exc}", field="reference") from exc
     try:
         model = Reference(text, tip=spec.tip, base=spec.base, source=str(path))
     except URDFError as exc:

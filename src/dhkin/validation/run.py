@@ -69,7 +69,7 @@ from __future__ import annotations
 import sys
 import time
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -286,7 +286,8 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
              complete_expected: bool | None = None,
              reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
              tip: str | None = None, timeout: float | None = DEFAULT_CALL_TIMEOUT,
-             isolate: bool = False) -> ValidationReport:
+             isolate: bool = False, packages: Mapping[str, str | Path] | None = None
+             ) -> ValidationReport:
     """Validate ``ik`` (default: dhkin's own) on ``robot``; see the module docstring.
 
     ``complete_expected`` (default: True, except for dhkin's own numerical IK, which returns
@@ -294,7 +295,8 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
     ``reference`` makes the targets and checks the solutions: "rounded" (default), "exact",
     "vendor" (the robot's shipped vendor URDF) or the path of a vendor URDF whose frames
     ``base`` -> ``tip`` are the table's base_link -> tool0 (defaults:
-    :data:`~dhkin.vendors.VENDOR_REFERENCES`, else base_link / tool0).
+    :data:`~dhkin.vendors.VENDOR_REFERENCES`, else base_link / tool0); a xacro reference is
+    expanded (``packages``: {NAME: folder} for its ``$(find NAME)``).
     ``timeout`` (s, None: no limit) bounds each IK call and ``isolate`` runs the calls in a
     child process (:mod:`dhkin.validation.calls`). Every argument is checked first
     (:mod:`dhkin.validation.arguments`): a wrong one is an InputError naming it.
@@ -316,7 +318,7 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
                            if arguments.flag(complete_expected, "complete_expected",
                                              optional=True) is None
                            else bool(complete_expected)))
-    model = target_model(robot, reference, base, tip)
+    model = target_model(robot, reference, base, tip, packages)
     callable_ik = own_ik(robot) if ik is None else ik
     q, sets = sample_joint_vectors(robot, n, settings.seed)
     return run_samples(robot, model, callable_ik, q, sets,

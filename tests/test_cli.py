@@ -14,6 +14,7 @@ import yaml
 import dhkin
 from dhkin.cli import main
 from dhkin.validators import run_check_urdf
+from dhkin.vendors import vendor_dir
 
 from .conftest import REFERENCE_URDFS, REPO
 
@@ -134,7 +135,7 @@ def test_compare_and_validate_find_the_shipped_vendor_urdf_from_anywhere(
     code, out, _ = run(capsys, "compare", "aubo_i10", "-n", "50")
     assert code == 0 and out.startswith("OK:"), out
     code, out, _ = run(capsys, "validate", "aubo_i10", "--reference", "vendor", "-n", "10")
-    shipped = (REFERENCE_URDFS / "aubo_i10.urdf").resolve()
+    shipped = vendor_dir().resolve() / "aubo_i10.urdf"  # the installed package's copy
     assert code == 0, out
     assert f"reference: vendor {shipped} (base_link -> wrist3_Link)" in out
     for argv, named in ((["compare", "planar_2r"], "urdf: planar_2r has no vendor URDF"),

@@ -318,8 +318,7 @@ def test_cli_broken_pipe_in_a_real_pipe() -> None:
     try:
         result = subprocess.run([sys.executable, "-m", "dhkin.cli", "fk", "ur5", "0", "0", "0",
                                  "0", "0", "0"], stdout=write_end, stderr=subprocess.PIPE,
-                                text=True, check=False, cwd=REPO,
-                                env={**os.environ, "PYTHONPATH": str(REPO / "src")})
+                                text=True, check=False, cwd=REPO)  # the installed dhkin
     finally:
         os.close(write_end)
     assert result.returncode == EXIT_BROKEN_PIPE

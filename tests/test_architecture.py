@@ -30,8 +30,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                   "dhkin.validation", "dhkin.validation.*", "dhkin.compare",
                   "dhkin.importer", "dhkin.import_names")),
     ("facade", ("dhkin.robot",)),
-    ("application", ("dhkin", "dhkin.checks", "dhkin.cli", "dhkin.cli_input",
-                     "dhkin.cli_describe")),
+    ("application", ("dhkin", "dhkin.checks", "dhkin.check_report", "dhkin.cli",
+                     "dhkin.cli_check", "dhkin.cli_describe", "dhkin.cli_input")),
 )
 
 

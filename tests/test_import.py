@@ -1,6 +1,6 @@
 """`dhkin import`: URDF / xacro descriptions -> DH tables, checked against the description.
 
-Every vendor URDF of ../shared/reference is imported with the base and tip frames its README
+Every vendor URDF of robots/vendor is imported with the base and tip frames its README
 gives, in both conventions; the written table is loaded back, its URDF generated through xacro
 and compared with the vendor URDF by Pinocchio (``compare_with_urdf``: the round trip), and its
 limits are the description's. The family the import reports is the one each arm's geometry has.
@@ -407,6 +407,6 @@ def test_imported_builtins_cite_their_source() -> None:
     for name in IMPORTED:
         table = dhkin.load(name).table
         vendor = VENDOR_REFERENCES[name]
-        assert f"../shared/reference/{vendor.file} ({vendor.base} -> {vendor.tip})" in table.source
+        assert f"robots/vendor/{vendor.file} ({vendor.base} -> {vendor.tip})" in table.source
         assert "Upstream (the file's first comment): github.com/" in table.source
         assert VENDOR_IMPORTS[vendor.file][:2] == (vendor.base, vendor.tip)

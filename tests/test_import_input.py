@@ -1,7 +1,7 @@
 """Descriptions as real files have them (issue 27, items 2, 5 and 6): XML declarations,
 byte-order marks and encodings, one-joint chains, chains of hundreds of metres, tool0 moved by
 the last joint, names with '/', and faults named at their line in the user's file (a xacro's
-macro file included). The reproducers d01, d02, d03, d08 and d09 of ../shared/reproducers are
+macro file included). Issue 27's reproducers d01, d02, d03, d08 and d09 are
 tests here: each gives the right table (its FK equal to Pinocchio's on the description to
 DEFAULT_TOLERANCE) or one line naming the file and the field.
 """

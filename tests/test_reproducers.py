@@ -1,5 +1,5 @@
 """Costs and interrupts (issue 27, items 3 and 5): the reproducers d05 (memory of large
-batches) and d10 (Ctrl-C) of ../shared/reproducers, and the band within which an OPW file is
+batches) and d10 (Ctrl-C) of issue 27, and the band within which an OPW file is
 written in the plain form MoveIt reads.
 
 Memory is traced with tracemalloc (numpy reports its allocations to it); no test asserts a time

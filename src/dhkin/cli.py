@@ -8,10 +8,10 @@ import json
 import os
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
+from dhkin.cli_check import cmd_check
 from dhkin.cli_describe import add_export_parser, add_import_parser, package_arg, packages_of
 from dhkin.cli_input import (
     EXIT_BAD_INPUT,
@@ -35,20 +35,13 @@ from dhkin.cli_input import (
     positive_int,
 )
 from dhkin.errors import DhkinError, InputError
-from dhkin.robot import Robot, builtin_dir, builtin_names, load
+from dhkin.robot import Robot, builtin_names, load
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import matrix_to_rpy
 
 
 def _robot_arg(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("robot", help="built-in robot name (see `dhkin robots`) or a table file")
-
-
-def _default_reference_dir() -> Path | None:
-    """../shared/reference next to the working directory or next to the source checkout."""
-    candidates = [Path.cwd().parent / "shared" / "reference",
-                  Path(__file__).resolve().parents[3] / "shared" / "reference"]
-    return next((c for c in candidates if c.is_dir()), None)
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
@@ -64,10 +57,17 @@ def cmd_compare(args: argparse.Namespace) -> int:
     """Poses and joints (names, types, limits, velocities) of a table against another URDF.
     Exit 1 on a pose deviation above --tolerance; with --strict also on any joint difference."""
     from dhkin.compare import compare_with_urdf
+    from dhkin.vendors import VendorReference, shipped_reference
 
-    report = compare_with_urdf(load(args.robot), args.urdf, base_frame=args.base_frame,
-                               tip=args.tip, robot_tip=args.robot_tip, n=args.n, seed=args.seed,
-                               tolerance=args.tolerance, packages=packages_of(args))
+    robot = load(args.robot)
+    # Without a URDF: the robot's vendor URDF shipped with dhkin, with its frames.
+    urdf, listed = ((args.urdf, VendorReference(args.urdf, "base_link", "tool0"))
+                    if args.urdf is not None else shipped_reference(robot.name, "urdf"))
+    report = compare_with_urdf(robot, urdf, base_frame=args.base_frame or listed.base,
+                               tip=args.tip or listed.tip,
+                               robot_tip=args.robot_tip or listed.robot_tip,
+                               n=args.n, seed=args.seed, tolerance=args.tolerance,
+                               packages=packages_of(args))
     print(report.summary())
     if not report.ok:
         print(f"worst joint vector (rad): {np.array2string(report.worst_q, precision=6)}")
@@ -196,28 +196,6 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return EXIT_OK if report.ok else EXIT_FAILED
 
 
-def cmd_check(args: argparse.Namespace) -> int:
-    from dhkin.checks import VENDOR_POSES, CheckOptions, all_passed, check_robot, format_table
-
-    if not args.all and not args.robots:
-        raise DhkinError("check: name robots to check, or --all for every built-in robot")
-    names = builtin_names() if args.all else args.robots
-    reference_dir = Path(args.reference_dir) if args.reference_dir else _default_reference_dir()
-    options = CheckOptions(reference_dir=reference_dir, ik_poses=args.ik_poses,
-                           vendor_poses=(VENDOR_POSES if args.vendor_poses is None
-                                         else args.vendor_poses), seed=args.seed)
-    print(f"built-in robots: {builtin_dir()}", file=sys.stderr)
-    print(f"vendor references: {reference_dir or 'not found'}", file=sys.stderr)
-    rows = {}
-    for k, name in enumerate(names, 1):
-        print(f"[{k}/{len(names)}] checking {name} ...", file=sys.stderr, flush=True)
-        rows[name] = check_robot(load(name), options)
-    print(format_table(rows))
-    passed = all_passed(rows)
-    print("all checks passed" if passed else "SOME CHECKS FAILED")
-    return EXIT_OK if passed else EXIT_FAILED
-
-
 # --------------------------------------------------------------------------------------------
 # `dhkin singularity ROBOT q... [--deg]` and `dhkin map ROBOT -o FILE.png [options]`
 
@@ -315,10 +293,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="compare a robot with another URDF (e.g. the vendor's): "
                                        "poses, and joint names, types, limits and velocities")
     _robot_arg(p)
-    p.add_argument("urdf", help="the other URDF file")
-    p.add_argument("--base-frame", default="base_link", help="base frame in the other URDF")
-    p.add_argument("--tip", default="tool0", help="tip frame in the other URDF")
-    p.add_argument("--robot-tip", default="tool0", help="tip frame of our URDF")
+    p.add_argument("urdf", nargs="?",
+                   help="the other URDF file (default: the robot's vendor URDF shipped with "
+                        "dhkin, robots/vendor, with its frames from dhkin.vendors)")
+    p.add_argument("--base-frame", help="base frame in the other URDF (default base_link)")
+    p.add_argument("--tip", help="tip frame in the other URDF (default tool0)")
+    p.add_argument("--robot-tip", help="tip frame of our URDF (default tool0)")
     p.add_argument("-n", type=positive_int, default=1000,
                    help="joint vectors to sample (default 1000)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
@@ -389,8 +369,9 @@ def build_parser() -> argparse.ArgumentParser:
                                     "records)")
     p.add_argument("--reference", help="description that makes the targets and checks the "
                                        "solutions: 'rounded' (default: the generated URDF with "
-                                       "10 significant digits), 'exact' (the generated URDF) or "
-                                       "a vendor URDF file of the same robot")
+                                       "10 significant digits), 'exact' (the generated URDF), "
+                                       "'vendor' (the robot's vendor URDF shipped with dhkin) "
+                                       "or a vendor URDF file of the same robot")
     p.add_argument("--base", help="base frame in the --reference URDF (default: from "
                                   "dhkin.vendors for a listed robot, else base_link)")
     p.add_argument("--tip", help="frame of the --reference URDF equal to the table's tool0 "
@@ -410,11 +391,17 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="the main job: regenerate, validate, cross-check")
     p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")
     p.add_argument("--all", action="store_true", help="check every built-in robot")
-    p.add_argument("--reference-dir", help="folder of vendor URDFs (default ../shared/reference)")
+    p.add_argument("--reference-dir", help="folder of vendor URDFs (default: the ones shipped "
+                                           "with dhkin, robots/vendor)")
     p.add_argument("--ik-poses", type=positive_int, default=10_000, help="IK poses per robot")
     p.add_argument("--vendor-poses", type=positive_int, default=None,
                    help="IK poses per robot on its vendor URDF (default 2000)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
+    p.add_argument("--details", action="store_true",
+                   help="also print every check's figures, robot by robot")
+    p.add_argument("--json", type=output_name,
+                   help="write every check's figures to this file as JSON")
+    force_arg(p)
     p.set_defaults(run=cmd_check)
     return parser
 

@@ -45,8 +45,9 @@ from dhkin.transforms import pose_error
 #: It allows for deg <-> rad rounding only. A table value v in deg becomes v * fl(pi/180): the
 #: constant and the product are each rounded once, 2u relative with u = 2**-53; the generated
 #: URDF writes repr() (exact), and parsing the other URDF's decimal text rounds once more (u).
-#: So a table giving the other file's value in deg lands within 3u|x| < 3.4e-16 |x| of it:
-#: below 1e-12 for every |x| < 2900 rad or m (real joints: |x| <= 4 pi, velocities < 30 rad/s).
+#: So a table giving the other file's value in deg lands within ``3u |x| < 3.4e-16 |x|`` of
+#: it: below 1e-12 for every ``|x| < 2900`` rad or m (real joints: ``|x| <= 4 pi``, velocities
+#: < 30 rad/s).
 #: Any rounding a person makes is far larger: 170 deg vs ABB's 2.967 rad is 6e-5, 3.1416 vs pi
 #: is 7e-6, UR's 1.570796327 for pi/2 is 2e-10.
 LIMIT_TOLERANCE = 1e-12

@@ -82,7 +82,7 @@ MAX_JOINTS = 32
 
 
 #: Largest magnitude of a revolute joint's limits, in turns (2 turns: +-720 deg, +-4pi rad). The
-#: widest real joint in robots/ and in the vendor URDFs of ../shared/reference turns +-360.6 deg
+#: widest real joint in robots/ and in the vendor URDFs of robots/vendor turns +-360.6 deg
 #: (Motoman GP7 joint 6), datasheets go to +-400 deg (ABB wrists) and continuous joints are imported
 #: as +-360 deg. The IK lists every in-limit 2pi copy of a solution: within +-2 turns a joint has at
 #: most 6 copies (a 6-joint branch at most 6^6), where +-36000 deg asked for 229 TiB.

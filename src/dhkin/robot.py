@@ -279,7 +279,7 @@ class Robot:
         """Singularity report of q (URDF joint values, rad and m).
 
         ``kinds``: the singularities q is at or near (subset of "wrist", "elbow", "shoulder");
-        ``distances`` (|sin q5|, metres); the analytic det J factored into shoulder x elbow x
+        ``distances`` (``|sin q5|``, metres); the analytic det J factored into shoulder x elbow x
         wrist terms; Pinocchio's ``sigma_min``, singular values, Yoshikawa measures and
         condition. ``thresholds`` default to dhkin.singularity.DEFAULT_THRESHOLDS, or override
         some kinds: {"wrist": 1e-3}. FamilyError outside the closed-form families. See

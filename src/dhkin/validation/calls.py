@@ -151,6 +151,10 @@ def collect(result: Any, dof: int, limit: int = MAX_SOLUTIONS_PER_CALL) -> CallR
     """Read what an IK returned, lazily, into a :class:`CallResult` (see the module docstring).
     Exceptions raised while iterating (a generator's body) propagate to the caller's guard."""
     expected = f"expected an iterable of joint vectors ({dof} numbers each)"
+    if (isinstance(result, np.ndarray) and result.ndim == 2 and result.shape[1] == dof
+            and result.dtype.kind in "iuf" and len(result) <= limit):
+        # The common answer, a (k, dof) real array: the checks below, done for all rows at once.
+        return CallResult(list(np.array(result, dtype=float, copy=True)))
     try:
         items = _items(result, dof)
     except TypeError as exc:

@@ -20,7 +20,7 @@ from dhkin.errors import InputError, URDFError
 from dhkin.reference import Reference
 from dhkin.transforms import invert
 from dhkin.validation.arguments import quoted
-from dhkin.vendors import VENDOR_REFERENCES
+from dhkin.vendors import VENDOR_REFERENCES, shipped_reference
 
 #: Significant digits of the default "rounded" reference (see :func:`rounded_urdf`).
 ROUNDED_DIGITS = 10
@@ -28,6 +28,10 @@ ROUNDED_DIGITS = 10
 
 #: Names of the built-in reference descriptions (anything else is a URDF path).
 REFERENCE_KINDS: tuple[str, ...] = ("rounded", "exact")
+
+
+#: The name of the robot's vendor URDF shipped with dhkin (:func:`dhkin.vendors.vendor_file`).
+SHIPPED_VENDOR = "vendor"
 
 
 _ROUNDED_ELEMENT = re.compile(r"<(?:origin|axis|limit)\b[^>]*>")
@@ -123,10 +127,10 @@ class ReferenceSpec:
 
 def resolve_reference(robot: Arm, reference: str | Path | ReferenceSpec | None = None,
                       base: str | None = None, tip: str | None = None) -> ReferenceSpec:
-    """``reference`` ("rounded", the default; "exact"; a vendor URDF path; or a ReferenceSpec)
-    with the vendor frames ``base`` / ``tip`` -> a :class:`ReferenceSpec`. A vendor file's frames
-    default to :data:`~dhkin.vendors.VENDOR_REFERENCES` for a robot listed there, else
-    base_link / tool0."""
+    """``reference`` ("rounded", the default; "exact"; "vendor", the robot's vendor URDF shipped
+    with dhkin; a vendor URDF path; or a ReferenceSpec) with the vendor frames ``base`` /
+    ``tip`` -> a :class:`ReferenceSpec`. A vendor file's frames default to
+    :data:`~dhkin.vendors.VENDOR_REFERENCES` for a robot listed there, else base_link / tool0."""
     if isinstance(reference, ReferenceSpec):
         spec = reference
     elif reference is None or (isinstance(reference, str) and reference in REFERENCE_KINDS):
@@ -136,10 +140,13 @@ def resolve_reference(robot: Arm, reference: str | Path | ReferenceSpec | None =
         return ReferenceSpec(kind=str(reference or "rounded"))
     else:
         path = Path(reference)
+        if isinstance(reference, str) and reference == SHIPPED_VENDOR:
+            path = shipped_reference(robot.name, "reference (--reference)")[0]
         if not path.is_file():
             raise InputError(f"reference (--reference): {str(path)!r} is not a file; "
-                             f"expected {' or '.join(map(repr, REFERENCE_KINDS))} or "
-                             "the path of a URDF of the same robot", field="reference")
+                             f"expected {', '.join(map(repr, REFERENCE_KINDS))}, "
+                             f"{SHIPPED_VENDOR!r} or the path of a URDF of the same robot",
+                             field="reference")
         listed = VENDOR_REFERENCES.get(robot.name)
         spec = ReferenceSpec(kind="vendor", path=str(path.resolve()),
                              base=listed.base if listed else "base_link",

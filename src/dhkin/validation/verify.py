@@ -17,8 +17,9 @@ def verify_solutions(robot: Arm, model: TargetModel, T: NDArray[np.float64],
             ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], str]:
     """Finite solutions, their residuals on the reference, and what is wrong with them ('')."""
     dof = robot.dof
-    good = [s for s in returned if s.shape == (dof,) and np.all(np.isfinite(s))]
-    Q = np.array(good, dtype=float).reshape(len(good), dof)
+    shaped = [s for s in returned if s.shape == (dof,)]
+    Q = np.array(shaped, dtype=float).reshape(len(shaped), dof)
+    Q = Q[np.all(np.isfinite(Q), axis=1)]
     position: NDArray[np.float64] = np.zeros(0)
     rotation: NDArray[np.float64] = np.zeros(0)
     if len(Q):

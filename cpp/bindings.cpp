@@ -539,7 +539,11 @@ class ChainModel {
 
 }  // namespace
 
+// The general 6R solver's bindings (cpp/bindings_general6r.cpp).
+void bind_general6r(nb::module_& m);
+
 NB_MODULE(_core, m) {
+  bind_general6r(m);
   m.doc() = "dhkin's compiled core: chains, the closed-form IK pipeline (see cpp/dhkin/*.hpp).";
   m.attr("BRANCHES") = kBranches;
   m.attr("WHY_SIZE") = dhkin::kWhySize;

@@ -229,14 +229,11 @@ def test_robot_ik_uses_the_general_solver() -> None:
 def _fold(robot: Robot, sigma: float) -> np.ndarray:
     """A joint vector of the CRX-10iA whose Jacobian's scaled smallest singular value is
     ``sigma`` (joint 2 moved towards a fold by bisection)."""
-    from dhkin.ik.compiled.general6r_roots import smallest_singular
-
     solver = robot.general_solver
     assert solver is not None
 
     def measure(value: float) -> float:
-        q = np.array([0.3, value, 1.1, 0.2, 0.8, -0.5])
-        return float(smallest_singular(solver.tip_chain, q, solver.tip_lever, np.inf))
+        return solver.smallest_singular(np.array([0.3, value, 1.1, 0.2, 0.8, -0.5]))
 
     low, high = -0.2285349, 0.0  # the fold (sigma 0) lies at q2 = -0.228535 (measured)
     assert measure(low) < sigma < measure(high)
@@ -263,20 +260,16 @@ def test_singular_flag_at_the_edge_of_its_band(factor: float) -> None:
 
 def _free_pose(robot: Robot, start: np.ndarray) -> np.ndarray:
     """Joint values where axis 6 lies on axis 1 (q1 and q6 then move one rotation): found by
-    least squares on joints 2-5 (fixed seed)."""
+    least squares on joints 2-5 (fixed seed). Two joints turn about one line when their
+    columns of the Jacobian (Pinocchio's, at tool0: the twist of each joint's line) are equal
+    up to the sign of their directions."""
     import scipy.optimize
 
-    from dhkin.ik.compiled.chain import fk_frames
-
-    solver = robot.general_solver
-    assert solver is not None
+    reference = robot.reference()
 
     def residual(x: np.ndarray) -> np.ndarray:
-        frames = np.empty((7, 12))
-        fk_frames(solver.tip_chain, np.array([start[0], *x, start[5]]), frames)
-        z1, o1 = frames[0, [2, 6, 10]], frames[0, [3, 7, 11]]
-        z6, o6 = frames[5, [2, 6, 10]], frames[5, [3, 7, 11]]
-        return np.concatenate([np.cross(z1, z6), np.cross(o6 - o1, z1)])
+        J = reference.jacobian(np.array([start[0], *x, start[5]]))
+        return J[:, 0] - np.sign(J[3:, 0] @ J[3:, 5]) * J[:, 5]
 
     fit = scipy.optimize.least_squares(residual, start[1:5], xtol=1e-15, ftol=1e-15, gtol=1e-15)
     q = np.array([start[0], *fit.x, start[5]])
@@ -387,17 +380,17 @@ def test_far_poses_are_out_of_reach_before_the_elimination(name: str) -> None:
 
 
 def test_reach_at_its_edge() -> None:
-    """DH frame 6 within the links' length (plus the tolerance's widening) is within reach, a
-    hair beyond is not."""
-    from dhkin.ik.compiled.general6r import within_reach
-
-    solver = dhkin.load("xarm6").general_solver
+    """DH frame 6 within the links' length (plus the tolerance's widening) is within reach (no
+    solution there: the elimination says so), a hair beyond is not (answered before it)."""
+    robot = dhkin.load("xarm6")
+    solver = robot.general_solver
     assert solver is not None
     reach = solver.reach(DEFAULT_TOLERANCE, solver.table.tool)
     pose = np.eye(4)
     for factor, inside in ((1.0 - 1e-12, True), (1.0 + 1e-12, False)):
         pose[:3, 3] = np.array([0.6, 0.0, 0.8]) * reach * factor
-        assert within_reach(pose, reach) == inside
+        result = robot.ik(robot.table.base @ pose @ robot.table.tool)
+        assert len(result) == 0 and result.reason.startswith("out of reach") != inside
 
 
 def test_far_pose_on_the_command_line_is_one_line(capsys: pytest.CaptureFixture[str]) -> None:

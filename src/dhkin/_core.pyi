@@ -1,4 +1,4 @@
-"""Type information of dhkin._core, the compiled core (cpp/bindings.cpp)."""
+"""Type information of dhkin._core, the compiled core (cpp/bindings*.cpp)."""
 
 from typing import Any
 
@@ -62,3 +62,27 @@ class ClosedForm:
                errors: NDArray[np.float64], out_q: NDArray[np.float64],
                out_valid: NDArray[np.bool_], out_branch: NDArray[np.int16],
                out_flags: NDArray[np.uint8], out_errors: NDArray[np.float64]) -> None: ...
+
+# The general 6R solver (cpp/bindings_general6r.cpp, cpp/dhkin/general6r/).
+class General6R:
+    def __init__(self, fields: dict[str, NDArray[np.float64]]) -> None: ...
+    def candidates(self, T_dh: NDArray[np.float64], solve_ill: bool
+                   ) -> tuple[NDArray[np.float64], NDArray[np.int64], float, bool]: ...
+    def roots(self, T_dh: NDArray[np.float64], tolerance: float
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, NDArray[np.float64]]: ...
+    def smallest_singular(self, q: NDArray[np.float64]) -> float: ...
+    def solve(self, T: NDArray[np.float64], seed: NDArray[np.float64], tolerance: float,
+              copies: bool, tcp: NDArray[np.float64] | None = None
+              ) -> tuple[int, int, float, float, int, int,
+                         tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.uint8]]]: ...
+    def solve_batch(self, T: NDArray[np.float64], seeds: NDArray[np.float64], tolerance: float,
+                    copies: bool, tcp: NDArray[np.float64] | None = None
+                    ) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64],
+                                     NDArray[np.uint8]],
+                               NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], int,
+                               int]: ...
+
+def general6r_multistart(before: NDArray[np.float64], direction: NDArray[np.float64],
+                         offset: NDArray[np.float64], tail: NDArray[np.float64],
+                         target: NDArray[np.float64], starts: NDArray[np.float64],
+                         tolerance: float, patience: int, most: int) -> NDArray[np.float64]: ...

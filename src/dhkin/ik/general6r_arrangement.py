@@ -1,6 +1,6 @@
 """How the general 6R solver eliminates (:mod:`dhkin.ik.general6r`): the arrangements and the
 choice of one per table at build (the candidates themselves are compiled:
-:mod:`dhkin.ik.compiled.general6r`).
+``cpp/dhkin/general6r/candidates.hpp``).
 
 Poses T_dh are DH frame 0 -> DH frame 6 of the exact chain, metres; angles in rad.
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,12 +33,9 @@ class EliminatingSolver(Protocol):
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]: ...
 
-    def kernel_data(self, arrangement: Arrangement | None = None,
-                    elimination: Elimination | None = None
-                    ) -> tuple[NDArray[np.float64], ...]: ...
+    def core_for(self, arrangement: Arrangement, elimination: Elimination) -> Any: ...
 
-    def compiled_candidates(self, T_dh: NDArray[np.float64],
-                            data: tuple[NDArray[np.float64], ...] | None = None
+    def compiled_candidates(self, T_dh: NDArray[np.float64], core: Any = None
                             ) -> NDArray[np.float64]: ...
 
 #: A candidate angle is taken from an eigenvalue whose half-angle arc tangent's imaginary
@@ -104,9 +101,9 @@ def choose_arrangement(solver: EliminatingSolver, poses: int = 12) -> Arrangemen
             if regular < SINGULAR_PENCIL:
                 continue
             recovered, starts = 0, 0
-            data = solver.kernel_data(arrangement, el)
+            core = solver.core_for(arrangement, el)
             for q, T_dh in zip(samples, targets, strict=True):
-                cands = solver.compiled_candidates(T_dh, data)
+                cands = solver.compiled_candidates(T_dh, core)
                 starts += cands.shape[0]
                 if cands.shape[0] and np.min(np.max(np.abs(wrap(cands - q)), axis=1)) < 1e-6:
                     recovered += 1

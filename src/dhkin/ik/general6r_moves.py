@@ -1,9 +1,9 @@
 """The moved poses of the general 6R solver's ill-conditioned poses (:mod:`dhkin.ik.general6r`;
-:func:`dhkin.ik.compiled.general6r.all_candidates`): a small rigid motion of DH frame 0 by
+``all_candidates`` in cpp/dhkin/general6r/candidates.hpp): a small rigid motion of DH frame 0 by
 which such a pose is moved, solved, and followed back (docs/general6r.md, "Every root"). One
 direction: where the motion turns a pair of roots near a fold into a complex pair, the pair's
 start (its real part) reaches one of them and the fold partner probed from it the other
-(:func:`dhkin.ik.compiled.general6r_roots.fold_partner`); measured on 1,000 ill-conditioned
+(``fold_partner``, cpp/dhkin/general6r/roots.hpp); measured on 1,000 ill-conditioned
 special-angle poses of the CRX-10iA and the tilted UR5, the second, opposite motion found no
 root the first missed and cost half the time of such a pose.
 """
@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 #: tilted UR5 in every arrangement, of the CRX-10iA in both its regular ones), a pose moved by
 #: e has a regular, but e-close to singular, matrix polynomial: its eigenvalues keep the
 #: regular part's (the roots), and each regular root of sigma moves by ~e / sigma, followed
-#: back (:func:`dhkin.ik.compiled.general6r_track.track`). Measured on the ill-conditioned
+#: back (``track``, cpp/dhkin/general6r/roots.hpp). Measured on the ill-conditioned
 #: special-angle poses of the CRX-10iA and the tilted UR5 (182 of 800) with scipy's QZ, every
 #: root was found for e from 1e-6 to 1e-3 (one lost at 1e-7, two at 1e-2). The kernels take
 #: the moved pencil's null vectors by inverse iteration, which near a singular point confuses
@@ -44,22 +44,8 @@ def moves(scale: float) -> NDArray[np.float64]:
     return out
 
 
-def perturbations(scale: float) -> NDArray[np.float64]:
-    """The rigid motions (1, 4, 4) of :func:`moves`: the rotation of the rotation vector
-    (Rodrigues) and the translation."""
-    out = np.tile(np.eye(4), (1, 1, 1))
-    for index, move in enumerate(moves(scale)):
-        angle = float(np.linalg.norm(move[:3]))
-        axis = move[:3] / angle
-        K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
-                      [-axis[1], axis[0], 0.0]])
-        out[index, :3, :3] = np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
-        out[index, :3, 3] = move[3:]
-    return out
-
-
 #: Starts of the multistart fallback of an ill-conditioned pose (with its moved poses,
-#: :func:`dhkin.ik.compiled.general6r.all_candidates`): near a highly degenerate singular set
+#: ``all_candidates``): near a highly degenerate singular set
 #: (a CRX-10iA pose at q = (-90, -90, 90, 90, 0, 90) deg: a stretched arm, q5 = 0) the moved
 #: poses' own eigenproblems lose the roots they have there, and 32 fixed starts find them
 #: (measured down to 32 there). They cost ~1 ms, on such poses only.

@@ -6,7 +6,7 @@ An arm with a closed-form family is checked against its family's branches; an ar
 (the CRX-10iA, the xArm6, tilted or calibrated six-revolute tables: ``robot.ik_family ==
 "general6r"``) has no such branches, and the general 6R solver's own answer cannot be the
 reference of the general 6R solver. This reference shares nothing with it but the exact chain:
-Newton (:func:`dhkin.ik.compiled.general6r_reference.multistart`) runs on dhkin's exact chain
+Newton (``multistart``, cpp/dhkin/general6r/reference.hpp) runs on dhkin's exact chain
 of the table (corrections included, equal to Pinocchio's FK to ~1e-15: ``dhkin check``'s "fk
 vs pin"), from :data:`STARTS` joint vectors drawn once with a fixed seed, no elimination. Each
 distinct root then verifies on the reference description (Pinocchio) at the tolerance plus its
@@ -60,16 +60,17 @@ class RootReference:
     verified on ``model`` (see the module docstring)."""
 
     def __init__(self, robot: Arm, model: TargetModel, starts: int = STARTS) -> None:
-        from dhkin.ik.plan import chain_array
+        from dhkin.ik.plan import chain_parts
 
         table = robot.table
-        chain = chain_array(table)
-        frame = np.eye(4)
-        frame[:3] = chain[-1, :12].reshape(3, 4)
-        chain[-1, :12] = (frame @ table.tool)[:3].ravel()  # to tool0, the point verified
+        parts = chain_parts(table)
+        #: The exact chain to tool0 (the point verified), by its parts (dhkin.ik.plan).
+        self.before, self.direction, self.offset = (
+            np.ascontiguousarray(parts[name], dtype=np.float64)
+            for name in ("before", "direction", "offset"))
+        self.tail = np.ascontiguousarray(parts["tail"] @ table.tool)
         self.robot = robot
         self.model = model
-        self.chain = chain
         self.base_inverse = np.linalg.inv(table.base)
         from scipy.stats import qmc
 
@@ -80,13 +81,14 @@ class RootReference:
         """The distinct roots (k, 6) of the pose T (base_link -> tool0) that verify on the
         reference description at ``tolerance`` plus its deviation, are isolated
         (:data:`ISOLATED`) and have a 2pi copy within the joint limits (that copy)."""
-        from dhkin.ik.compiled.general6r_reference import multistart
+        from dhkin._core import general6r_multistart
 
-        target = np.ascontiguousarray((self.base_inverse @ T)[:3])
-        found = np.empty((MAX_ROOTS, self.robot.dof))
+        target = np.ascontiguousarray(self.base_inverse @ T)
         allowed = tolerance + self.model.deviation
-        count = multistart(self.chain, target, self.starts, allowed, len(self.starts), found)
-        roots = self._in_limits(found[:count])
+        found = np.asarray(general6r_multistart(self.before, self.direction, self.offset, self.tail,
+                                                target, self.starts, allowed, len(self.starts),
+                                                MAX_ROOTS))
+        roots = self._in_limits(found)
         if not len(roots):
             return roots
         position, rotation = pose_error(self.model.fk(roots),

@@ -1,0 +1,197 @@
+// The general 6R solver's answer from its verified roots: the seed's member where a joint is
+// free, the in-limit 2pi copies, values onto the limits (docs/general6r.md, step 7).
+//
+// Joint values are URDF joint values (rad); `chain` is the exact chain to the point verified and
+// `target` its pose in DH frame 0 (metres). `tolerance` is the verification tolerance;
+// `slack` = the caller's tolerance / lever: a value that far outside a limit counts as on it.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "dhkin/copies.hpp"
+#include "dhkin/general6r/members.hpp"
+#include "dhkin/general6r/roots.hpp"
+
+namespace dhkin::general6r {
+
+using Limits = std::array<JointLimit, kDof>;
+
+// A row of the answer: joint values, residuals, and whether it is singular.
+struct Solution {
+  Joints q{};
+  PoseError error;
+  bool singular = false;
+};
+
+// Whether every joint of q has a 2pi copy within the limits widened by `slack`.
+inline bool has_copy(const Limits& limits, const Joints& q, double slack) {
+  for (int j = 0; j < kDof; ++j) {
+    const double first = std::ceil((limits[j].lower - slack - q[j]) / kTwoPi);
+    if (!(q[j] + kTwoPi * first <= limits[j].upper + slack)) return false;
+  }
+  return true;
+}
+
+// The seed's choice where a joint is free, in place, as the families' seeded candidate (the
+// member of the solution family nearest the seed): each singular root (sigma within `band`)
+// moves along the solutions towards the seed (walk), and is replaced by the point damped Newton
+// reaches from the seed where that point is singular, nearer the seed, and tied to the root by a
+// segment of solutions (on_segment: a free pair of coincident axes, where walking stalls in the
+// cloud of near-solutions). The seed is never a root of its own. A root whose member has no 2pi
+// copy within the limits (widened to the band), where the root itself has, stays where it was.
+// A root that moved onto an earlier one (the merging rule) is dropped.
+inline void seed_members(const Chain& chain, const Frame& target, const Joints& seed,
+                         const Limits& limits, double slack, double tolerance, double lever,
+                         double band, std::vector<Root>& roots) {
+  Joints projected;
+  PoseError projected_error;
+  const bool reached =
+      seed_projection(chain, target, seed, tolerance, lever, band, projected, projected_error);
+  const double distance_projected = squared_distance(projected, seed);
+  const double margin = std::max(slack, band);
+  for (Root& root : roots) {
+    if (!(root.sigma <= band)) continue;
+    Joints q = root.q;
+    PoseError error = root.error;
+    walk(chain, target, q, seed, tolerance, lever, band, error);
+    if (reached && distance_projected < squared_distance(q, seed) &&
+        on_segment(chain, target, q, projected, tolerance, lever, band)) {
+      q = wrapped(projected);
+      error = projected_error;
+      // damped Newton stops near, not at, the member nearest the seed: walk the rest
+      walk(chain, target, q, seed, tolerance, lever, band, error);
+    }
+    if (!has_copy(limits, q, margin) && has_copy(limits, root.q, margin)) continue;
+    root.q = q;
+    root.error = error;
+  }
+  std::vector<Root> kept;
+  for (const Root& root : roots) {
+    bool merged = false;
+    if (root.sigma <= band) {
+      for (const Root& other : kept) {
+        if (one_root(chain, target, root.q, other.q, tolerance)) {
+          merged = true;
+          break;
+        }
+      }
+    }
+    if (!merged) kept.push_back(root);
+  }
+  roots.swap(kept);
+}
+
+// A row whose values were set onto limits (`held` marks them): the other joints refined with
+// those held (monotone Newton: a root on the limit up to rounding is exact again), the values
+// clipped to the limits, verified again; false where it no longer verifies (`row` then holds the
+// clipped values as they were where that verifies).
+inline bool settle_on_limits(const Chain& chain, const Frame& target, const Limits& limits,
+                             const JointMask& held, double tolerance, double lever,
+                             Solution& row, bool restore) {
+  const Joints clipped = row.q;
+  refine(chain, target, row.q, held, refine_tolerance(tolerance, lever),
+         {kBudget, newton::kMonotone, 0.0});
+  for (int j = 0; j < kDof; ++j) {
+    row.q[j] = std::min(std::max(row.q[j], limits[j].lower), limits[j].upper);
+  }
+  row.error = check(chain, row.q.data(), target);
+  if (!row.error.within(tolerance) && restore) {
+    // the held joints leave Newton no way back (a singular root): as it was
+    row.q = clipped;
+    row.error = check(chain, row.q.data(), target);
+  }
+  return row.error.within(tolerance);
+}
+
+// Per root, per joint its 2pi copy nearest `reference` within the limits widened by `slack` (a
+// singular root's by the band: it lies anywhere in a cloud of near-solutions that wide), set onto
+// the limit where outside it and verified again; roots without such a copy, or that no longer
+// verify, are left out.
+inline void nearest_copies(const Chain& chain, const Frame& target, const std::vector<Root>& roots,
+                           const Joints& reference, const Limits& limits, double slack,
+                           double tolerance, double lever, double band,
+                           std::vector<Solution>& out) {
+  for (const Root& root : roots) {
+    const bool singular = root.sigma <= band;
+    const double margin = singular ? std::max(slack, band) : slack;
+    Solution row{root.q, root.error, singular};
+    JointMask held{};
+    bool inside = true, moved = false;
+    for (int j = 0; j < kDof && inside; ++j) {
+      const double low = limits[j].lower - margin, high = limits[j].upper + margin;
+      double value = root.q[j] + kTwoPi * std::nearbyint((reference[j] - root.q[j]) / kTwoPi);
+      if (value < low) value += kTwoPi * std::ceil((low - value) / kTwoPi);
+      if (value > high) value -= kTwoPi * std::ceil((value - high) / kTwoPi);
+      if (value < low || value > high) inside = false;
+      if (value < limits[j].lower) value = limits[j].lower, moved = held[j] = true;
+      if (value > limits[j].upper) value = limits[j].upper, moved = held[j] = true;
+      row.q[j] = value;
+    }
+    if (!inside) continue;
+    if (moved && !settle_on_limits(chain, target, limits, held, tolerance, lever, row, true)) {
+      continue;
+    }
+    out.push_back(row);
+  }
+  // singular members set onto a limit may meet: one root
+  std::vector<Solution> distinct;
+  for (const Solution& row : out) {
+    bool merged = false;
+    if (row.singular) {
+      for (const Solution& other : distinct) {
+        if (one_root(chain, target, row.q, other.q, tolerance)) {
+          merged = true;
+          break;
+        }
+      }
+    }
+    if (!merged) distinct.push_back(row);
+  }
+  out.swap(distinct);
+}
+
+// Every 2pi copy of each root within the limits widened by `slack` (joint 1 slowest), a value
+// outside a limit set onto it, the row refined with it held and verified again (left out where
+// it no longer verifies). Joints whose limits are not finite take the copy nearest `reference`.
+inline void every_copy(const Chain& chain, const Frame& target, const std::vector<Root>& roots,
+                       const Joints& reference, const Limits& limits, double slack,
+                       double tolerance, double lever, double band, std::vector<Solution>& out) {
+  for (const Root& root : roots) {
+    std::array<long, kDof> first{}, count{};
+    long total = 1;
+    for (int j = 0; j < kDof; ++j) {
+      const double low = limits[j].lower - slack, high = limits[j].upper + slack;
+      if (!(std::isfinite(low) && std::isfinite(high))) {
+        first[j] = static_cast<long>(std::nearbyint((reference[j] - root.q[j]) / kTwoPi));
+        count[j] = 1;
+      } else {
+        first[j] = static_cast<long>(std::ceil((low - root.q[j]) / kTwoPi));
+        count[j] = std::max(0L, static_cast<long>(std::floor((high - root.q[j]) / kTwoPi)) -
+                                    first[j] + 1);
+      }
+      total *= count[j];
+    }
+    for (long index = 0; index < total; ++index) {
+      Solution row{root.q, root.error, root.sigma <= band};
+      JointMask held{};
+      long rest = index;
+      for (int j = kDof - 1; j >= 0; --j) {
+        const double value = root.q[j] + kTwoPi * static_cast<double>(first[j] + rest % count[j]);
+        rest /= count[j];
+        row.q[j] = std::min(std::max(value, limits[j].lower), limits[j].upper);
+        held[j] = row.q[j] != value;
+      }
+      bool moved = false;
+      for (bool h : held) moved = moved || h;
+      if (moved && !settle_on_limits(chain, target, limits, held, tolerance, lever, row, false)) {
+        continue;
+      }
+      out.push_back(row);
+    }
+  }
+}
+
+}  // namespace dhkin::general6r

@@ -1,0 +1,297 @@
+// The general 6R solver's starts for one pose: the elimination's eigenvalues, split into one
+// monomial vector per root, back-substituted (docs/general6r.md, "How it works", steps 3-5).
+//
+// M(x) = A x^2 + B x + C (12 x 12), theta_k = lead + 2 atan(x). Its leading matrix A = M at
+// theta_k = lead + pi must be invertible: of the four angles shift + {0, 1, 2, 3} pi/2 the first
+// whose matrix is conditioned within kLeadCondition becomes lead (else the best of them), so
+// that no root lies at infinity unless all four are roots. The eigenvalues come from the
+// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, Eigen's EigenSolver) where A is well
+// conditioned, else from QZ on the pencil (Eigen's GeneralizedEigenSolver, real QZ: backward
+// stable, it keeps the eigenvalues of the regular part). Where no leading matrix is well
+// conditioned, or a cluster holds more than kMaxSplit eigenvalues, the pose is solved moved
+// (all_candidates).
+#pragma once
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <array>
+#include <cmath>
+#include <complex>
+#include <cstdint>
+#include <vector>
+
+#include "dhkin/general6r/back_substitution.hpp"
+#include "dhkin/general6r/elimination.hpp"
+#include "dhkin/general6r/null_space.hpp"
+
+namespace dhkin::general6r {
+
+// The leading matrix is accepted when its reciprocal condition (1-norm) is at least this: the
+// eigenvalues then lose at most ~1e-8 relative to rounding, well within Newton's basin.
+constexpr double kLeadCondition = 1e-8;
+// Eigenvalues of the eliminated joint whose angles (rad, real parts) lie closer than this are
+// one cluster, split at each member into as many starts as the cluster has members. Taking two
+// eigenvalues together costs starts, never roots (each member's own null vector is in its
+// split); taking apart the copies of an eigenvalue shared by two roots loses one. Rounding
+// spreads such copies by ~eps / (the leading matrix's condition) ~2e-8 at kLeadCondition (a
+// defective double eigenvalue, a fold, by ~its square root, 1.5e-4). Each member is split at its
+// own value, not at the cluster's mean: two roots whose eliminated joints differ by 1e-7 rad and
+// whose monomial vectors are nearly parallel (a CRX-10iA pose near q5 = 0) are exact at their
+// own members, mixed at the mean.
+constexpr double kCluster = 1e-3;
+// Beyond this size an eigenvalue is infinite (theta_k = lead + pi to the last bit).
+constexpr double kInfinite = 1e150;
+// Rows of Q whose singular value is below this fraction of the largest are its null space.
+constexpr double kRankFraction = 1e-10;
+
+// Where a start comes from (bits): a near-real complex pair of eigenvalues (its imaginary angle
+// beyond kCluster, within the band); a cluster of eigenvalues (its root's fold partner is
+// probed); moved pose p (kMoved << p: its root is followed back to the pose).
+enum Origin : std::uint32_t { kPaired = 1, kShared = 2, kMoved = 4 };
+
+struct Start {
+  Joints q{};
+  std::uint32_t origin = 0;
+};
+
+// How one elimination went: the leading matrix's reciprocal condition (below kLeadCondition: the
+// pose's eigenproblem is ill-conditioned; NaN: the pose's quantities are not finite), and whether
+// a cluster held more than kMaxSplit eigenvalues (a curve of solutions at one value of the
+// eliminated joint: a defective multiple eigenvalue whose computed copies scatter by
+// eps^(1 / order), and whose null space holds the curve's vectors besides the roots').
+struct EliminationInfo {
+  double lead_condition = 0.0;
+  bool degenerate = false;
+};
+
+namespace candidates_detail {
+
+using Rows6 = Eigen::Matrix<double, 6, kProducts>;
+
+// p, l, p.p, p.l, p x l, (p.p) l - 2 (p.l) p of l = F's z axis, p = F's origin.
+inline Eigen::Matrix<double, 1, kQuantities> quantities(const Frame& F) {
+  const double l0 = F.R[0][2], l1 = F.R[1][2], l2 = F.R[2][2];
+  const double p0 = F.p[0], p1 = F.p[1], p2 = F.p[2];
+  const double pp = p0 * p0 + p1 * p1 + p2 * p2;
+  const double pl = p0 * l0 + p1 * l1 + p2 * l2;
+  Eigen::Matrix<double, 1, kQuantities> out;
+  out << p0, p1, p2, l0, l1, l2, pp, pl, p1 * l2 - p2 * l1, p2 * l0 - p0 * l2, p0 * l1 - p1 * l0,
+      pp * l0 - 2.0 * pl * p0, pp * l1 - 2.0 * pl * p1, pp * l2 - 2.0 * pl * p2;
+  return out;
+}
+
+// The 12 x 12 matrix of six equations W (6 x 9 over x_a^i x_b^j, i, j <= 2): W, and W times x_a.
+inline Matrix12 stacked(const Rows6& W) {
+  Matrix12 M = Matrix12::Zero();
+  M.block<6, kProducts>(0, 0) = W;
+  M.block<6, kProducts>(6, 3) = W;
+  return M;
+}
+
+// The reciprocal condition (1-norm) of M and its inverse (0 where M is singular).
+inline double reciprocal_condition(const Matrix12& M, Matrix12& inverse) {
+  inverse = M.partialPivLu().inverse();
+  const double norm = M.cwiseAbs().colwise().sum().maxCoeff();
+  const double inverse_norm = inverse.cwiseAbs().colwise().sum().maxCoeff();
+  const double ratio = 1.0 / (norm * inverse_norm);
+  return ratio > 0.0 ? ratio : 0.0;  // NaN (an exactly singular M): 0
+}
+
+// Radix of the balancing scale factors (powers of two: scaling is exact).
+constexpr double kRadix = 2.0;
+// A row and column pair is rescaled when that shrinks their combined norm below this fraction.
+constexpr double kBalanceGain = 0.95;
+
+// K balanced in place by a diagonal similarity D^-1 K D (Parlett and Reinsch, as LAPACK's
+// dgebal, which dgeev runs first): each row and its column brought to comparable norms by
+// powers of two. The eigenvalues are K's; their computed accuracy is not: the companion of a
+// badly scaled M(x) unbalanced lost two real roots 5.5e-11 apart (a CRX-10iA pose at a joint
+// limit) into one complex pair, balanced it keeps them apart.
+template <class Square>
+void balance(Square& K) {
+  const int n = static_cast<int>(K.rows());
+  for (bool done = false; !done;) {
+    done = true;
+    for (int i = 0; i < n; ++i) {
+      double column = 0.0, row = 0.0;
+      for (int j = 0; j < n; ++j) {
+        if (j == i) continue;
+        column += std::abs(K(j, i));
+        row += std::abs(K(i, j));
+      }
+      if (column == 0.0 || row == 0.0) continue;
+      const double total = column + row;
+      double factor = 1.0;
+      for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
+      for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
+      if ((column + row) / factor < kBalanceGain * total) {
+        done = false;
+        K.row(i) /= factor;
+        K.col(i) *= factor;
+      }
+    }
+  }
+}
+
+// A near-real eigenvalue as the angle of the eliminated joint (relative to lead).
+struct Angle {
+  double real = 0.0, imaginary = 0.0;
+};
+
+}  // namespace candidates_detail
+
+// The starts of every root the eigenproblem of T_dh (DH frame 0 -> DH frame 6 of the exact
+// chain) holds, appended to `out`; none where the leading matrix is ill-conditioned unless
+// `solve_ill` (QZ on the pencil then). Near-real eigenvalues (angle's imaginary part within the
+// band) whose angles lie within kCluster of each other are one cluster of m: at each distinct
+// member the m-dimensional null space of M is split into one monomial vector per root (m = 1:
+// inverse iteration), and each vector's joints are back-substituted.
+inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool solve_ill,
+                                  std::vector<Start>& out) {
+  using namespace candidates_detail;
+  EliminationInfo info;
+  const Frame target = el.reversed ? inverse(T_dh) : T_dh;
+  Frame H = el.D0_inverse * target * el.E_inverse;
+  for (int r = 0; r < 3; ++r) H.p[r] /= el.scale;
+  Eigen::Matrix<double, kProducts, kQuantities> values;
+  for (int s = 0; s < kProducts; ++s) values.row(s) = quantities(el.before[s] * H * el.after[s]);
+  if (!values.allFinite()) {
+    info.lead_condition = NAN;
+    return info;
+  }
+  const Eigen::Matrix<double, kProducts, kQuantities> G = el.right_inverse * values;
+  Right right;
+  right.Q = G.topRows<8>().transpose();
+  right.r = G.row(8).transpose();
+  const Eigen::JacobiSVD<RightSide> svd(right.Q, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const auto& sv = svd.singularValues();
+  right.rank = 0;
+  for (int i = 0; i < 8; ++i) right.rank += sv(i) > sv(0) * kRankFraction ? 1 : 0;
+  right.pseudo_inverse.setZero();
+  for (int i = 0; i < right.rank; ++i) {
+    right.pseudo_inverse += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / sv(i);
+  }
+  // rows N with N Q = 0 eliminate the right side's products: six (a generic mix where more)
+  const int null_rows = kQuantities - right.rank;
+  Eigen::Matrix<double, 6, kQuantities> N;
+  const auto left_null = svd.matrixU().rightCols(null_rows).transpose();
+  if (null_rows > 6) {
+    N = el.mix.leftCols(null_rows) * left_null;
+  } else {
+    N = left_null;
+  }
+  const Rows6 Pc = N * el.P[0], Ps = N * el.P[1];
+  Rows6 P1 = N * el.P[2];
+  P1.col(8) -= N * right.r;
+  const auto M_at = [&](double angle) {
+    return stacked((Pc * std::cos(angle) + Ps * std::sin(angle) + P1) * el.half2);
+  };
+  // leading matrix: the first of M at four angles conditioned within kLeadCondition
+  double best = -1.0, lead = el.shift;
+  Matrix12 A, A_inverse, inverse_here;
+  for (int quarter = 0; quarter < 4; ++quarter) {
+    const double angle = el.shift + quarter * 0.5 * kPi;
+    const Matrix12 M = M_at(angle + kPi);
+    const double ratio = reciprocal_condition(M, inverse_here);
+    if (ratio > best) best = ratio, lead = angle, A = M, A_inverse = inverse_here;
+    if (ratio >= kLeadCondition) break;
+  }
+  info.lead_condition = best;
+  // B and C of M(x) = A x^2 + B x + C with theta_k = lead + 2 atan(x)
+  const double cs = std::cos(lead), sn = std::sin(lead);
+  const Matrix12 B = stacked(2.0 * (Ps * cs - Pc * sn) * el.half2);
+  const Matrix12 C = M_at(lead);
+  using Matrix24 = Eigen::Matrix<double, kEigenvalues, kEigenvalues>;
+  Eigen::Matrix<std::complex<double>, kEigenvalues, 1> eigenvalues;
+  if (best >= kLeadCondition) {
+    Matrix24 companion = Matrix24::Zero();
+    companion.topRightCorner<kMonomials, kMonomials>().setIdentity();
+    companion.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
+    companion.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
+    balance(companion);
+    const Eigen::EigenSolver<Matrix24> eigen(companion, false);
+    if (eigen.info() != Eigen::Success) return info;
+    eigenvalues = eigen.eigenvalues();
+  } else {
+    if (!solve_ill) return info;
+    Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();
+    left.topRightCorner<kMonomials, kMonomials>().setIdentity();
+    left.bottomLeftCorner<kMonomials, kMonomials>() = -C;
+    left.bottomRightCorner<kMonomials, kMonomials>() = -B;
+    right_matrix.bottomRightCorner<kMonomials, kMonomials>() = A;
+    const Eigen::GeneralizedEigenSolver<Matrix24> qz(left, right_matrix, false);
+    if (qz.info() != Eigen::Success) return info;
+    for (int i = 0; i < kEigenvalues; ++i) {
+      const double beta = qz.betas()(i);
+      eigenvalues(i) = beta != 0.0 ? qz.alphas()(i) / beta
+                                   : std::complex<double>(INFINITY, 0.0);
+    }
+  }
+  // near-real eigenvalues as angles, sorted by the real part
+  std::array<Angle, kEigenvalues> angles;
+  int kept = 0;
+  for (int index = 0; index < kEigenvalues; ++index) {
+    const std::complex<double> x = eigenvalues(index);
+    const std::complex<double> angle =
+        std::abs(x) > kInfinite ? std::complex<double>(kPi, 0.0) : 2.0 * std::atan(x);
+    if (!(std::abs(angle.imag()) <= el.band)) continue;
+    if (!(std::abs(angle.real()) < INFINITY)) continue;
+    if (x.imag() < 0.0 && std::abs(angle.imag()) > kCluster) continue;  // a pair's second
+    int position = kept++;
+    while (position > 0 && angles[position - 1].real > angle.real()) {
+      angles[position] = angles[position - 1];
+      --position;
+    }
+    angles[position] = {angle.real(), angle.imag()};
+  }
+  Vector12 vector;
+  Basis basis, split_vectors;
+  for (int first = 0; first < kept;) {
+    int last = first + 1;
+    while (last < kept && angles[last].real - angles[last - 1].real < kCluster) ++last;
+    const int m = std::min(last - first, kMaxSplit);
+    if (last - first > kMaxSplit) info.degenerate = true;
+    for (int member = first; member < last; ++member) {
+      if (member > first && angles[member].real == angles[member - 1].real) continue;
+      const double angle = angles[member].real;
+      const std::uint32_t origin =
+          (std::abs(angles[member].imaginary) > kCluster ? kPaired : 0) | (m > 1 ? kShared : 0);
+      if (m == 1) {
+        if (!null_vector(A, B, C, 0.5 * angle, vector)) continue;
+        out.push_back({back_substitute(el, right, H, lead + angle, vector.data()), origin});
+        continue;
+      }
+      if (!null_space(A, B, C, 0.5 * angle, m, basis)) continue;
+      split(basis, split_vectors);
+      for (int v = 0; v < m; ++v) {
+        const Vector12 column = split_vectors.col(v);
+        out.push_back({back_substitute(el, right, H, lead + angle, column.data()), origin});
+      }
+    }
+    first = last;
+  }
+  return info;
+}
+
+// candidates() of T_dh; where its eigenproblem is ill-conditioned (the matrix polynomial is
+// singular, or nearly, at this pose) instead, and where an eigenvalue is degenerate (a curve of
+// solutions at one value of the eliminated joint) as well, those of the pose moved by
+// moves.motion(1), whose eigenproblem is regular (solved by QZ where still ill-conditioned) with
+// simple eigenvalues: every real root of the moved pose is among its eigenvalues, and every
+// regular root of T_dh lies near one of them (docs/general6r.md, "Every root"). With the moved
+// pose, the fallback starts are starts too: near a highly degenerate singular set (a stretched
+// arm with a free wrist) a moved pose's own eigenproblem can lose the roots it has there.
+// Returns whether the moved pose was used (false also where T_dh's quantities are not finite).
+inline bool all_candidates(const Elimination& el, const Moves& moves, const Frame& T_dh,
+                           std::vector<Start>& out) {
+  const EliminationInfo info = candidates(el, T_dh, false, out);
+  if (std::isnan(info.lead_condition)) return false;
+  if (info.lead_condition >= kLeadCondition && !info.degenerate) return false;
+  const std::size_t first = out.size();
+  candidates(el, moves.motion(1.0) * T_dh, true, out);
+  for (std::size_t i = first; i < out.size(); ++i) out[i].origin |= kMoved;
+  for (const Joints& q : moves.fallback) out.push_back({q, 0});
+  return true;
+}
+
+}  // namespace dhkin::general6r

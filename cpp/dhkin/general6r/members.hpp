@@ -1,0 +1,131 @@
+// The seed's member of a curve of solutions: the general 6R solver's singular roots moved
+// towards the seed along the solutions (docs/general6r.md, "Singular roots"), never a root of
+// the seed's own.
+//
+// Joint values are URDF joint values (rad); `chain` is the exact chain to the point verified;
+// targets are that point's pose in DH frame 0 (metres).
+#pragma once
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "dhkin/general6r/roots.hpp"
+
+namespace dhkin::general6r {
+
+// Trial steps of walk (a failed step is retried a quarter as long): on a curved solution set the
+// midpoint of a chord of length L lies ~kappa L^2 / 8 off it, so long steps fail where short ones
+// pass (a CRX-10iA pose at q5 = 0 whose members 1.6 rad apart needed steps of ~0.05 rad); 100
+// trials walk ~3 rad at that length, beyond any seed within the continuity distance of a member.
+constexpr int kWalkSteps = 100;
+// Interior points (at k / 8 of the way) of a segment from a singular root to the seed's Newton
+// point that must lie on the solutions for the two to be one set of solutions (on_segment): a
+// straight segment of solutions (a free pair of coincident axes, q_i +- q_j fixed) passes at
+// all, a chord across a curved set or between two distinct roots fails near its middle.
+constexpr int kSegmentPoints = 7;
+// Newton's budget for a member (it converges slowly at a singular root).
+constexpr int kMemberBudget = 4 * newton::kMaxSteps;
+
+// The sum of squared wrapped joint differences.
+inline double squared_distance(const Joints& a, const Joints& b) {
+  double total = 0.0;
+  for (int j = 0; j < kDof; ++j) total += wrap(a[j] - b[j]) * wrap(a[j] - b[j]);
+  return total;
+}
+
+// A singular root q (in place) moved along the solutions towards `seed`: the member of a curve
+// of solutions nearest the seed where a joint is free. Each step goes along the Jacobian's weak
+// directions (singular values within `band`) by the seed's offset projected onto them, at most
+// kMaxJointStep per joint, is refined by Newton and kept while it verifies at `tolerance`, comes
+// nearer the seed and stays on the same root (the midpoint of the step verifies too: near a fold
+// Newton could land on a distinct root nearer the seed); a failed step is retried a quarter as
+// long, down to `band`, and the walk ends where the seed's offset along the weak directions is
+// within `tolerance` (rad). Then polished by monotone Newton steps. `error`: the residuals of the
+// final q, where it moved.
+inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joints& seed,
+                 double tolerance, double lever, double band, PoseError& error) {
+  double distance = squared_distance(q, seed);
+  double length = newton::kMaxJointStep;
+  for (int trial_step = 0; trial_step < kWalkSteps; ++trial_step) {
+    const Jacobian J = scaled_jacobian(chain, q, lever);
+    const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullV);
+    Eigen::Matrix<double, kDof, 1> offset, step = Eigen::Matrix<double, kDof, 1>::Zero();
+    for (int j = 0; j < kDof; ++j) offset(j) = wrap(seed[j] - q[j]);
+    for (int w = 0; w < kDof; ++w) {
+      if (svd.singularValues()(w) <= band) {
+        step += svd.matrixV().col(w).dot(offset) * svd.matrixV().col(w);
+      }
+    }
+    const double longest = step.cwiseAbs().maxCoeff();
+    if (longest <= tolerance) break;  // nearer than the tolerance (rad): no step it could verify
+    const double scale = longest > length ? length / longest : 1.0;
+    Joints trial, middle;
+    for (int j = 0; j < kDof; ++j) trial[j] = q[j] + scale * step(j);
+    refine(chain, target, trial, JointMask{}, tolerance, {kMemberBudget, newton::kGrowth, 0.0});
+    const PoseError trial_error = check(chain, trial.data(), target);
+    const double trial_distance = squared_distance(trial, seed);
+    for (int j = 0; j < kDof; ++j) middle[j] = q[j] + 0.5 * wrap(trial[j] - q[j]);
+    const bool between = check(chain, middle.data(), target).within(tolerance);
+    if (!(trial_error.within(tolerance) && trial_distance < distance && between)) {
+      length = 0.25 * std::min(length, longest);
+      if (length <= band) break;
+      continue;
+    }
+    q = wrapped(trial);
+    distance = trial_distance;
+    error = trial_error;
+    length = std::min(2.0 * length, newton::kMaxJointStep);
+  }
+  // polish: monotone Newton steps from the member reached (Newton converges slowly at a singular
+  // root; these bring its residual to kRefineFraction of the tolerance)
+  Joints trial = q;
+  refine(chain, target, trial, JointMask{}, refine_tolerance(tolerance, lever),
+         {kMemberBudget, newton::kMonotone, 0.0});
+  const PoseError polished = check(chain, trial.data(), target);
+  if (polished.within(tolerance) && polished.largest() < error.largest()) {
+    q = wrapped(trial);
+    error = polished;
+  }
+}
+
+// Damped Newton from `seed` onto the solutions (the families' seeded refinement), into `out`;
+// whether it verifies at `tolerance` and is singular (sigma within `band`): a candidate for the
+// seed's member of a curve, which on_segment must tie to a root the elimination found (it is
+// never a root of its own).
+inline bool seed_projection(const Chain& chain, const Frame& target, const Joints& seed,
+                            double tolerance, double lever, double band, Joints& out,
+                            PoseError& error) {
+  out = seed;
+  refine(chain, target, out, JointMask{}, refine_tolerance(tolerance, lever),
+         {kMemberBudget, newton::kGrowth, newton::kSeedDamping});
+  error = check(chain, out.data(), target);
+  if (!error.within(tolerance)) return false;
+  return smallest_singular(chain, out, lever, band) <= band;
+}
+
+// Whether the segment from a to b (joint differences wrapped) lies on the solutions: each of its
+// kSegmentPoints interior points, refined by monotone Newton steps, verifies at `tolerance`
+// within `band` (rad) of where it was. Within the band, not at the point itself: the
+// elimination's singular root lies in the cloud of near-solutions around the set (~1e-7 rad off
+// a line of solutions on the CRX-10iA), and a chord from it drifts off the line by as much times
+// the angle travelled.
+inline bool on_segment(const Chain& chain, const Frame& target, const Joints& a, const Joints& b,
+                       double tolerance, double lever, double band) {
+  const double goal = refine_tolerance(tolerance, lever);
+  for (int k = 1; k <= kSegmentPoints; ++k) {
+    const double t = k / (kSegmentPoints + 1.0);
+    Joints start, point;
+    for (int j = 0; j < kDof; ++j) start[j] = a[j] + t * wrap(b[j] - a[j]);
+    point = start;
+    refine(chain, target, point, JointMask{}, goal, {kMemberBudget, newton::kMonotone, 0.0});
+    if (!check(chain, point.data(), target).within(tolerance)) return false;
+    for (int j = 0; j < kDof; ++j) {
+      if (std::abs(point[j] - start[j]) > band) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace dhkin::general6r

@@ -1,0 +1,250 @@
+// The general 6R solver's roots: Newton on the exact chain from every start, verification,
+// merging of starts that reach one root, the Jacobian's smallest singular value (the "singular"
+// flag), fold partners, and a moved pose's roots brought back (docs/general6r.md, step 6).
+//
+// Joint values are URDF joint values (rad); `chain` is the exact chain to the point verified
+// (tool0 or the TCP); targets are that point's pose in DH frame 0 (metres).
+#pragma once
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "dhkin/angles.hpp"
+#include "dhkin/chain.hpp"
+#include "dhkin/general6r/candidates.hpp"
+#include "dhkin/newton.hpp"
+#include "dhkin/plan.hpp"
+
+namespace dhkin::general6r {
+
+// Refinement budget (chain evaluations) per start.
+constexpr int kBudget = 120;
+// Refinement budget of a start from a near-real complex pair of eigenvalues: a real root of the
+// chain that the model's rounding or its fold made complex lies within the imaginary band of the
+// start and converges in a few Newton steps (at a double root linearly, halving per step: from
+// 1e-8 to 1e-12 within ~15); a truly complex one never converges, and the full budget spent on
+// it was most of the refinement's time (0.8 such per pose on the CRX-10iA and xArm6).
+constexpr int kPairBudget = 40;
+// Roots whose smallest singular value (scaled Jacobian) is at most this get their fold partner
+// probed (fold_partner). Near a fold two roots lie d ~ 2 sigma / kappa apart along the weak
+// direction (kappa ~1 rad^-1 on arms of order-one lengths); where that direction has no component
+// along the eliminated joint, their eliminated joints differ only by ~d^2, and the eigenvalues
+// (accurate to ~1e-6 at a CRX-10iA pose near q5 = 0) can no longer tell them apart: a pair 8e-3
+// rad apart (sigma 1.5e-4) shared an eigenvalue to 1.7e-7. Above 1e-2, d^2 > 1e-4.
+constexpr double kProbeSigma = 1e-2;
+// Step (rad) of the central difference of the Jacobian along the weak direction in fold_partner
+// (second-derivative error ~h^2, rounding ~eps / h).
+constexpr double kProbeStep = 1e-5;
+// Halvings of the motion along the path from a moved pose back to the pose before the last step
+// to the pose itself: 2^-30 of a motion of 1e-3 is ~1e-12, below any tolerance.
+constexpr int kTrackSteps = 30;
+// Chain evaluations per step of that path (Newton from the previous step's root: a few steps).
+constexpr int kStepBudget = 40;
+
+using Jacobian = Eigen::Matrix<double, 6, kDof, Eigen::RowMajor>;
+
+// The tolerance Newton is given (it stops at kRefineFraction of it) so that a root's residual is
+// at most kRefineFraction of `tolerance` on the oracle's FK as well: less the FK rounding margin
+// (kFkRounding per metre of `lever`) at that scale.
+inline double refine_tolerance(double tolerance, double lever) {
+  return std::max(tolerance - kFkRounding * lever / newton::kRefineFraction, 0.5 * tolerance);
+}
+
+// The exact chain's Jacobian at q, its linear rows divided by `lever` (m per rad of a point of
+// the arm; rad and m / lever then weigh alike).
+inline Jacobian scaled_jacobian(const Chain& chain, const Joints& q, double lever) {
+  std::array<Frame, kDof + 1> frames;
+  fk_frames(chain, q.data(), frames.data());
+  Jacobian J;
+  jacobian(chain, frames.data(), J.data());
+  J.topRows<3>() /= lever;
+  return J;
+}
+
+// The smallest singular value of the scaled Jacobian at q where it is at most `band`; above it
+// a lower bound may come back instead: |det J| / |J|_F^5 <= sigma_min (the other five singular
+// values are at most |J|_F), and the SVD runs only where that bound is at most `band`.
+inline double smallest_singular(const Chain& chain, const Joints& q, double lever, double band) {
+  const Jacobian J = scaled_jacobian(chain, q, lever);
+  const double size = J.squaredNorm();
+  const double bound = size > 0.0 ? std::abs(J.determinant()) / std::pow(size, 2.5) : 0.0;
+  if (bound > band) return bound;
+  return Eigen::JacobiSVD<Jacobian>(J).singularValues()(kDof - 1);
+}
+
+// Joint values wrapped to (-pi, pi].
+inline Joints wrapped(const Joints& q) {
+  Joints out;
+  for (int j = 0; j < kDof; ++j) out[j] = wrap(q[j]);
+  return out;
+}
+
+// Whether a and b are one root: within kMaxJointStep of each other (wrapped) and their midpoint
+// verifies at `tolerance`.
+inline bool one_root(const Chain& chain, const Frame& target, const Joints& a, const Joints& b,
+                     double tolerance) {
+  Joints middle;
+  for (int j = 0; j < kDof; ++j) {
+    const double step = wrap(a[j] - b[j]);
+    if (std::abs(step) > newton::kMaxJointStep) return false;
+    middle[j] = b[j] + 0.5 * step;
+  }
+  return check(chain, middle.data(), target).within(tolerance);
+}
+
+// A verified root whose residual is still above kRefineFraction of `goal` (Newton's budget ran
+// out on the way: slow convergence near a fold) refined further by monotone steps, in place.
+inline PoseError polish(const Chain& chain, const Frame& target, Joints& q, double goal,
+                        PoseError error) {
+  if (error.largest() <= newton::kRefineFraction * goal) return error;
+  Joints trial = q;
+  refine(chain, target, trial, JointMask{}, goal, {kBudget, newton::kMonotone, 0.0});
+  const PoseError better = check(chain, trial.data(), target);
+  if (better.largest() >= error.largest()) return error;
+  q = trial;
+  return better;
+}
+
+// q (in place), a start near a root of the moved pose P(1) target, followed along the path
+// s = 1, 1/2, ..., 2^-kTrackSteps, 0 by Newton at each step; whether every step's root verified
+// at `tolerance` (q is then a root of target). The roots move continuously with s.
+inline bool track(const Chain& chain, const Frame& target, Joints& q, const Moves& moves,
+                  double goal, double tolerance) {
+  for (int step = 0; step <= kTrackSteps + 1; ++step) {
+    const double s = step > kTrackSteps ? 0.0 : std::ldexp(1.0, -step);
+    const Frame moved = moves.motion(s) * target;
+    refine(chain, moved, q, JointMask{}, goal, {kStepBudget, newton::kGrowth, 0.0});
+    if (!check(chain, q.data(), moved).within(tolerance)) return false;
+  }
+  return true;
+}
+
+// A start of the moved pose to a root of the pose itself (target), in place; its residuals
+// there. Refined on the moved pose first (the elimination's start of a nearly singular pose can
+// be off its own root), then Newton goes to the pose; where that fails, the moved root is
+// followed back along the path (track). A start that is no root of the moved pose (a complex
+// pair's) gets a short direct Newton.
+inline PoseError back_from_moved(const Chain& chain, const Frame& target, Joints& q,
+                                 const Moves& moves, double goal, double tolerance) {
+  const newton::Settings short_newton{kPairBudget, newton::kGrowth, 0.0};
+  const Joints start = q;
+  const Frame moved = moves.motion(1.0) * target;
+  refine(chain, moved, q, JointMask{}, goal, short_newton);
+  if (!check(chain, q.data(), moved).within(tolerance)) {
+    q = start;
+    refine(chain, target, q, JointMask{}, goal, short_newton);
+    return check(chain, q.data(), target);
+  }
+  const Joints root = q;
+  refine(chain, target, q, JointMask{}, goal, short_newton);
+  const PoseError error = check(chain, q.data(), target);
+  if (error.within(tolerance)) return error;
+  q = root;
+  if (track(chain, target, q, moves, goal, tolerance)) return check(chain, q.data(), target);
+  return {INFINITY, INFINITY};
+}
+
+// The fold partner of the root q, refined by Newton into `out`: along the Jacobian's weakest
+// right singular vector v (sigma, left vector u; linear rows over `lever`) the pose error is
+// ~ t sigma u + t^2 / 2 kappa u with kappa = u . d2F[v, v] (a central difference of the Jacobian
+// along v), zero again at t = -2 sigma / kappa. False where that lies beyond kMaxJointStep (no
+// fold partner near) or kappa vanishes.
+inline bool fold_partner(const Chain& chain, const Frame& target, const Joints& q, double lever,
+                         double goal, Joints& out) {
+  const Jacobian J = scaled_jacobian(chain, q, lever);
+  const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const double sigma = svd.singularValues()(kDof - 1);
+  const auto u = svd.matrixU().col(kDof - 1);
+  const auto v = svd.matrixV().col(kDof - 1);
+  double curvature = 0.0;
+  for (const double sign : {1.0, -1.0}) {
+    for (int j = 0; j < kDof; ++j) out[j] = q[j] + sign * kProbeStep * v(j);
+    const Jacobian near = scaled_jacobian(chain, out, lever);
+    curvature += sign * u.dot(near * v) / (2.0 * kProbeStep);
+  }
+  if (!(std::abs(curvature) > 0.0)) return false;
+  const double t = -2.0 * sigma / curvature;
+  if (!(std::abs(t) <= newton::kMaxJointStep)) return false;
+  for (int j = 0; j < kDof; ++j) out[j] = q[j] + t * v(j);
+  refine(chain, target, out, JointMask{}, goal, {kBudget, newton::kGrowth, 0.0});
+  return true;
+}
+
+// A verified root: joint values wrapped to (-pi, pi], residuals, smallest singular value.
+struct Root {
+  Joints q{};
+  PoseError error;
+  double sigma = 0.0;
+};
+
+// Refine every start on the exact chain, keep those that verify at `tolerance`, merge those
+// that are one root. Only the elimination's starts are starts: the seed never is (it chooses
+// among the roots, it does not find them). Paired starts get kPairBudget; the roots reached from
+// shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
+// probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
+// partner, both 5e-4 from singular near a singular root, was found no other way); those of the
+// moved pose are brought back (back_from_moved). Returns the starts that did not verify; the
+// roots' sigmas are smallest_singular with `band`.
+inline int settle(const Chain& chain, const Frame& target, const std::vector<Start>& starts,
+                  const Moves& moves, double tolerance, double lever, double band,
+                  std::vector<Root>& roots) {
+  const double goal = refine_tolerance(tolerance, lever);
+  // on a moved (ill-conditioned) pose every root near a fold gets its partner probed: the roots
+  // there cluster near a singular point, and the moved poses' can collide in pairs
+  bool moved_pose = false;
+  for (const Start& start : starts) moved_pose = moved_pose || start.origin >= kMoved;
+  std::vector<bool> probe;
+  int failed = 0;
+  const auto known = [&](const Joints& q) {
+    for (std::size_t other = 0; other < roots.size(); ++other) {
+      if (one_root(chain, target, q, roots[other].q, tolerance)) return static_cast<int>(other);
+    }
+    return -1;
+  };
+  for (const Start& start : starts) {
+    Joints q = start.q;
+    PoseError error;
+    if (start.origin >= kMoved) {
+      error = back_from_moved(chain, target, q, moves, goal, tolerance);
+    } else {
+      const int budget = (start.origin & kPaired) ? kPairBudget : kBudget;
+      refine(chain, target, q, JointMask{}, goal, {budget, newton::kGrowth, 0.0});
+      error = check(chain, q.data(), target);
+    }
+    if (!error.within(tolerance)) {
+      ++failed;
+      continue;
+    }
+    error = polish(chain, target, q, goal, error);
+    q = wrapped(q);
+    const bool wants_probe = (start.origin & kShared) != 0 || moved_pose;
+    const int duplicate = known(q);
+    if (duplicate >= 0) {
+      probe[duplicate] = probe[duplicate] || wants_probe;
+      continue;
+    }
+    roots.push_back({q, error, smallest_singular(chain, q, lever, band)});
+    probe.push_back(wants_probe);
+  }
+  // near a fold, the partner of each root with a small singular value (its eliminated joint may
+  // equal this one's to the eigenvalues' accuracy)
+  const std::size_t found = roots.size();
+  for (std::size_t index = 0; index < found; ++index) {
+    if (!probe[index]) continue;
+    const Joints q = roots[index].q;
+    if (smallest_singular(chain, q, lever, kProbeSigma) > kProbeSigma) continue;
+    Joints partner;
+    if (!fold_partner(chain, target, q, lever, goal, partner)) continue;
+    PoseError error = check(chain, partner.data(), target);
+    if (!error.within(tolerance)) continue;
+    error = polish(chain, target, partner, goal, error);
+    partner = wrapped(partner);
+    if (known(partner) >= 0) continue;
+    roots.push_back({partner, error, smallest_singular(chain, partner, lever, band)});
+  }
+  return failed;
+}
+
+}  // namespace dhkin::general6r

@@ -1,0 +1,202 @@
+// The general 6R solver's single call and batch: a pose (base_link -> tool0 or a TCP, 4 x 4
+// row-major, metres) checked and projected, answered "out of reach" before any elimination where
+// DH frame 6 lies beyond the chain's links, its starts (candidates.hpp), roots (roots.hpp) and
+// answer (answer.hpp). Every pose is solved alone: a batch's answer does not depend on how it is
+// split among threads.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "dhkin/general6r/answer.hpp"
+#include "dhkin/general6r/candidates.hpp"
+#include "dhkin/general6r/roots.hpp"
+#include "dhkin/pose.hpp"
+
+namespace dhkin::general6r {
+
+// The point solutions are verified at: the exact chain to it, (tool tcp)^-1 (DH frame 6 -> that
+// point, inverted), and the lever of the verification tolerance (m).
+struct Tip {
+  Chain chain;
+  Frame tool_inverse;
+  double lever = 1.0;
+  double tool_length = 0.0;  // |translation of tool tcp| (m)
+};
+
+// A six-revolute table's solver: its elimination, moved poses, exact chain and limits.
+struct Solver {
+  Elimination elimination;
+  Moves moves;
+  Chain dh_chain;       // DH frame 0 -> DH frame 6, corrections included
+  Frame tool;           // DH frame 6 -> tool0
+  Frame base_inverse;   // base_link -> DH frame 0
+  Limits limits;
+  double lever = 1.0;   // the chain's lever: its longest link (at least 1 m)
+  double links = 0.0;   // the sum of the chain's link lengths (m)
+
+  // The tip at tool0, or at tool0 tcp (tcp: tool0 -> TCP).
+  Tip tip(const Frame* tcp = nullptr) const {
+    const double tip_lever = lever + norm(tool.translation());
+    const Frame end = tcp ? tool * *tcp : tool;
+    Tip out;
+    out.chain = dh_chain;
+    out.chain.tail = dh_chain.tail * end;
+    out.tool_inverse = inverse(end);
+    out.tool_length = norm(end.translation());
+    out.lever = tcp ? std::max(tip_lever, lever + out.tool_length) : tip_lever;
+    return out;
+  }
+
+  // The tip at DH frame 6 itself (roots of DH-frame-6 targets).
+  Tip dh_tip() const {
+    Tip out;
+    out.chain = dh_chain;
+    out.lever = lever;
+    return out;
+  }
+
+  // How far DH frame 6 may lie from DH frame 0 (m) for a pose of `tip` within `tolerance`: the
+  // chain's links, widened by the tolerance at the point and its rotation over the tool's length,
+  // and FK rounding.
+  double reach(double tolerance, const Tip& at) const {
+    return links + tolerance * (1.0 + at.tool_length) +
+           kFkRounding * (lever + norm(tool.translation()));
+  }
+};
+
+// The verification tolerance: `tolerance` less the FK rounding margin (kFkRounding per metre of
+// lever), so that a solution verified on our FK is within `tolerance` on the oracle's too.
+inline double verification_tolerance(double tolerance, double lever) {
+  return std::max(tolerance - kFkRounding * lever, 0.5 * tolerance);
+}
+
+// A root is flagged singular when its scaled Jacobian's smallest singular value is at most
+// sqrt(tolerance): along the weakest direction every point within ~sqrt(tolerance) rad of it
+// verifies as well, so at the tolerance the pose cannot be told from a singular one.
+inline double singular_band(double verification) { return std::sqrt(verification); }
+
+// DH frame 6's distance from DH frame 0 (m), by the largest coordinate first (no overflow at
+// 1e300 m).
+inline double reach_distance(const Frame& T_dh) {
+  const double largest =
+      std::max({std::abs(T_dh.p[0]), std::abs(T_dh.p[1]), std::abs(T_dh.p[2])});
+  if (!(largest > 0.0) || !std::isfinite(largest)) return largest;
+  const double x = T_dh.p[0] / largest, y = T_dh.p[1] / largest, z = T_dh.p[2] / largest;
+  return largest * std::sqrt(x * x + y * y + z * z);
+}
+
+enum class Outcome : int {
+  kSolved = 0,      // rows hold the solutions
+  kRejected = 1,    // the pose is not usable (`status` says why)
+  kOutOfReach = 2,  // `distance` beyond the links
+  kNoRoot = 3,      // no root verified (`failed` starts did not)
+  kNoCopy = 4,      // `verified` roots, none with an in-limit copy
+};
+
+struct Answer {
+  Outcome outcome = Outcome::kSolved;
+  int status = kUsable;
+  double projection = 0.0;  // how far the pose's rotation block was moved onto a rotation
+  double distance = 0.0;    // DH frame 6 from DH frame 0 (m), where out of reach
+  int failed = 0;           // starts that did not verify
+  int verified = 0;         // distinct roots
+  std::vector<Solution> rows;
+};
+
+// The roots of T_dh (DH frame 0 -> DH frame 6) verified on `tip`'s chain against `tip_target`
+// (DH frame 0 -> the tip) at the verification tolerance; returns the starts that failed.
+inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh,
+                         const Frame& tip_target, double verification, std::vector<Root>& roots) {
+  std::vector<Start> starts;
+  starts.reserve(64);
+  all_candidates(solver.elimination, solver.moves, T_dh, starts);
+  return settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever,
+                singular_band(verification), roots);
+}
+
+// Every solution of the pose T (4 x 4 row-major) within the joint limits: per root its in-limit
+// 2pi copy nearest `seed` (zeros: no seed), or every copy with `copies`. The roots do not depend
+// on the seed: it only chooses each root's copy and, on a curve of solutions, its member.
+inline Answer solve(const Solver& solver, const Tip& tip, const double* T, const Joints& seed,
+                    double tolerance, bool copies) {
+  Answer answer;
+  answer.status = pose_status(T);
+  if (answer.status != kUsable) {
+    answer.outcome = Outcome::kRejected;
+    return answer;
+  }
+  const Frame target = projected_frame(T, answer.projection);
+  const Frame tip_target = solver.base_inverse * target;
+  const Frame T_dh = tip_target * tip.tool_inverse;
+  answer.distance = reach_distance(T_dh);
+  if (!(answer.distance <= solver.reach(tolerance, tip))) {
+    answer.outcome = Outcome::kOutOfReach;
+    return answer;
+  }
+  const double verification = verification_tolerance(tolerance, tip.lever);
+  const double band = singular_band(verification);
+  std::vector<Root> roots;
+  answer.failed = settled_roots(solver, tip, T_dh, tip_target, verification, roots);
+  const double slack = tolerance / tip.lever;
+  bool singular = false;
+  for (const Root& root : roots) singular = singular || root.sigma <= band;
+  if (singular) {
+    seed_members(tip.chain, tip_target, seed, solver.limits, slack, verification, tip.lever,
+                 band, roots);
+  }
+  answer.verified = static_cast<int>(roots.size());
+  if (roots.empty()) {
+    answer.outcome = Outcome::kNoRoot;
+    return answer;
+  }
+  if (copies) {
+    every_copy(tip.chain, tip_target, roots, seed, solver.limits, slack, verification,
+               tip.lever, band, answer.rows);
+  } else {
+    nearest_copies(tip.chain, tip_target, roots, seed, solver.limits, slack, verification,
+                   tip.lever, band, answer.rows);
+  }
+  if (answer.rows.empty()) answer.outcome = Outcome::kNoCopy;
+  return answer;
+}
+
+// A batch's answers, rows of all poses one after the other.
+struct BatchAnswers {
+  std::vector<Solution> rows;
+  std::vector<std::int64_t> counts;  // rows per pose
+  std::vector<double> projection;
+  std::vector<std::int64_t> dropped;  // starts that did not verify, per pose
+  long rejected = -1;  // the first pose not usable (or -1), and why
+  int status = kUsable;
+};
+
+// solve() of N poses (4 x 4 row-major, consecutive) with their seeds (kDof values each,
+// `seed_stride` apart: 0 for one seed for all); stops at the first pose not usable.
+inline BatchAnswers solve_batch(const Solver& solver, const Tip& tip, const double* T,
+                                std::size_t n, const double* seeds, std::size_t seed_stride,
+                                double tolerance, bool copies) {
+  BatchAnswers out;
+  out.counts.reserve(n);
+  out.projection.reserve(n);
+  out.dropped.reserve(n);
+  out.rows.reserve(8 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    Joints seed;
+    for (int j = 0; j < kDof; ++j) seed[j] = seeds[i * seed_stride + j];
+    Answer answer = solve(solver, tip, T + 16 * i, seed, tolerance, copies);
+    if (answer.outcome == Outcome::kRejected) {
+      out.rejected = static_cast<long>(i);
+      out.status = answer.status;
+      return out;
+    }
+    out.counts.push_back(static_cast<std::int64_t>(answer.rows.size()));
+    out.projection.push_back(answer.projection);
+    out.dropped.push_back(answer.failed);
+    out.rows.insert(out.rows.end(), answer.rows.begin(), answer.rows.end());
+  }
+  return out;
+}
+
+}  // namespace dhkin::general6r

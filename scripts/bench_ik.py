@@ -30,9 +30,9 @@ Reported per library, single thread (EAIK's and py-opw's batch calls are given o
   as the peers do).
 
 Arms without a closed-form family (FANUC CRX-10iA, xArm6) are solved by the general 6R solver
-(dhkin.ik.general6r; its batch call is a loop over single calls); their target is a median of at
-most GENERAL_TARGET_US per single call, and ``--profile`` splits it into the elimination kernel,
-the refinement kernel and the Python around them.
+(dhkin.ik.general6r, in the compiled core; its batch call runs the pose loop there); their target
+is a median of at most GENERAL_TARGET_US per single call, and ``--profile`` splits it into the
+elimination, the roots, the answer and the Python around the core.
 
 ``--profile`` adds where dhkin's time goes (kernel stages and Python overhead); ``--memory`` a
 10^6-pose batch's traced peak memory. Timing is sensitive to other load on the machine: the
@@ -522,26 +522,19 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
 
 def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[str, float]]:
     """Per pose (us, median over the poses, fastest of the runs) of the general 6R solver's
-    single call: the elimination kernel (right side, left null space, leading matrix, the
-    eigenproblem, back-substitution), the refinement kernel (Newton on the exact chain,
-    verification, merging, the singular measure), and the Python around them (input checks,
-    2pi copies, the result)."""
-    from dhkin.ik.compiled.general6r import MAX_CANDIDATES, all_candidates
-    from dhkin.ik.compiled.general6r_roots import settle
-    from dhkin.ik.general6r import singular_band
-
+    single call, in the compiled core (cpp/dhkin/general6r/): one elimination (right side, left
+    null space, leading matrix, the eigenproblem, splits, back-substitution), the roots (Newton
+    on the exact chain, verification, merging, the singular measure, moved poses where
+    ill-conditioned), the answer (seed's members, in-limit copies), and the Python around the
+    core (input checks, the result)."""
     solver = robot.general_solver
     assert solver is not None
+    core = solver.core
     n = min(len(poses.T), 2000)
-    targets = [np.ascontiguousarray(solver._base_inverse @ T) for T in poses.T[:n]]
-    T_dh = [np.ascontiguousarray(T @ solver._tool_inverse) for T in targets]
-    starts, origin, info = (np.empty((MAX_CANDIDATES, 6)), np.empty(MAX_CANDIDATES, np.int64),
-                            np.empty(2))
-    roots, errors, sigmas = (np.empty((MAX_CANDIDATES, 6)), np.empty((MAX_CANDIDATES, 2)),
-                             np.empty(MAX_CANDIDATES))
-    data = (*solver._data, solver.perturbations, solver.fallback, solver._dggev)
-    counts = [all_candidates(*data, T, starts, origin, info) for T in T_dh]
-    band = singular_band(EXACT)
+    T_dh = [np.ascontiguousarray(solver.target_dh(T)) for T in poses.T[:n]]
+    targets = [np.ascontiguousarray(T) for T in poses.T[:n]]
+    seed = np.zeros(6)
+    counts = [len(core.candidates(T, True)[0]) for T in T_dh]
 
     def median_of(call: Callable[[int], object]) -> float:
         best = math.inf
@@ -554,17 +547,14 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
             best = min(best, statistics.median(times) / 1000.0)
         return best
 
-    def both(k: int) -> None:
-        count = all_candidates(*data, T_dh[k], starts, origin, info)
-        settle(solver.tip_chain, targets[k], starts, origin, count, solver.moves, EXACT,
-               solver.lever, band, roots, errors, sigmas)
-
-    eliminate = median_of(lambda k: all_candidates(*data, T_dh[k], starts, origin, info))
-    kernels = median_of(both)
+    eliminate = median_of(lambda k: core.candidates(T_dh[k], True))
+    roots = median_of(lambda k: core.roots(T_dh[k], EXACT))
+    solve = median_of(lambda k: core.solve(targets[k], seed, EXACT, False, None))
     single = median_of(lambda k: robot.ik(poses.T[k], copies=False))
-    return [("elimination kernel (eigenproblem included)", eliminate),
-            ("refinement kernel (Newton, verification, merging)", kernels - eliminate),
-            ("Python around the kernels", single - kernels),
+    return [("elimination (eigenproblem included)", eliminate),
+            ("roots (Newton, verification, merging)", roots - eliminate),
+            ("answer (members, in-limit copies)", solve - roots),
+            ("Python around the core", single - solve),
             ("single call, in all", single),
             ("candidates per pose (mean)", float(np.mean(counts)))]
 

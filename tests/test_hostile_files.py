@@ -9,8 +9,8 @@ Read-only install: the package is copied into a temporary folder and made read-o
 a-w); a subprocess runs ``dhkin ik`` with an unusable HOME. As root (who writes anywhere) the
 subprocess drops every capability first, so that the kernel enforces the permission bits for it
 as for any user; where that is not possible, the subprocess is told the folders are read-only
-instead (tempfile.TemporaryFile refuses them, which is how numba and dhkin test a folder). One
-subprocess compiles the kernels (15-40 s); the others load them or compile one tiny kernel.
+instead (tempfile.TemporaryFile refuses them, which is how a program tests a folder). Nothing is
+compiled at run time: the compiled core is built by ``pip install``.
 """
 
 from __future__ import annotations
@@ -39,15 +39,13 @@ import dhkin.maps.draw
 from dhkin.builtin import builtin_dir
 from dhkin.cli import main
 from dhkin.errors import FileWriteError, InputError
-from dhkin.ik.compiled import cache
 
 from .conftest import REPO
 
 #: A target the UR5 reaches with 8 solutions (the README's example pose): answered by the
 #: compiled core, which needs no cache.
 IK_ARGS = ("ik", "ur5", "--xyz", "0.4", "0.2", "0.3")
-#: A target of the xArm6, whose general 6R solver still compiles numba kernels on first use
-#: (cached): the read-only install's cache is checked on it.
+#: A target of the xArm6, answered by the general 6R solver (the compiled core too).
 GENERAL_IK_ARGS = ("ik", "xarm6", "--xyz", "0.3", "0.1", "0.3", "--rpy", "180", "0", "0",
                    "--deg")
 #: prctl(2) option dropping a capability from the bounding set (linux/prctl.h).
@@ -304,60 +302,7 @@ def test_file_write_error_is_an_os_error_naming_the_file(tmp_path, monkeypatch) 
 
 
 # --------------------------------------------------------------------------------------------
-# the kernel cache: where it goes
-
-
-@pytest.fixture
-def package(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """A stand-in for the kernels' package folder, which cache.writable takes as read-only."""
-    folder = tmp_path / "pkg"
-    folder.mkdir()
-    (folder / "kernel.py").write_text("x = 1\n")
-    writable = cache.writable
-    monkeypatch.setattr("numba.core.config.CACHE_DIR", "")  # no $NUMBA_CACHE_DIR
-    monkeypatch.setattr(cache, "writable",
-                        lambda path: not path.is_relative_to(folder) and writable(path))
-    return folder
-
-
-def test_cache_folder_choice(package, tmp_path) -> None:
-    xdg, home, temporary = tmp_path / "xdg", tmp_path / "home", tmp_path / "tmp"
-    temporary.mkdir()
-    key = cache._installation_key(package)
-    choice = cache.choose(package, {"XDG_CACHE_HOME": str(xdg), "HOME": str(home)}, temporary)
-    assert (choice.kind, choice.folder) == ("user", xdg / "dhkin" / "numba" / key)
-    choice = cache.choose(package, {"XDG_CACHE_HOME": "relative", "HOME": str(home)}, temporary)
-    assert (choice.kind, choice.folder) == ("user", home / ".cache" / "dhkin" / "numba" / key)
-    (tmp_path / "file").write_text("")
-    environ = {"HOME": str(tmp_path / "file")}  # ~/.cache cannot be made under a file
-    choice = cache.choose(package, environ, temporary)
-    mine = temporary / f"dhkin-{os.geteuid()}"
-    assert (choice.kind, choice.folder) == ("temporary", mine / "numba" / key)
-    assert stat.S_IMODE(mine.stat().st_mode) == 0o700
-    mine.chmod(0o777)  # open to others: never used (numba's cache files are pickles)
-    assert cache.choose(package, environ, temporary).kind == "none"
-    mine.chmod(0o700)
-    assert cache.choose(package, environ, tmp_path / "file").kind == "none"
-
-
-def test_cache_guard_cleans_stale_files_and_seeds_from_a_prebuilt_cache(package, tmp_path) -> None:
-    prebuilt, folder = tmp_path / "prebuilt", tmp_path / "user"
-    prebuilt.mkdir()
-    (prebuilt / "kernel.f-1.py311.nbi").write_bytes(b"index")
-    (prebuilt / "kernel.f-1.py311.1.nbc").write_bytes(b"code")
-    (prebuilt / cache.STAMP_NAME).write_text(cache.source_hash(package) + "\n")
-    folder.mkdir()
-    (folder / "kernel.old-1.py311.nbi").write_bytes(b"stale")
-    cache.guard(package, folder, prebuilt)
-    assert sorted(p.name for p in folder.iterdir()) == [
-        "dhkin-kernels.sha256", "kernel.f-1.py311.1.nbc", "kernel.f-1.py311.nbi"]
-    (package / "kernel.py").write_text("x = 2\n")  # an edit: the cache is stale
-    cache.guard(package, folder)
-    assert sorted(p.name for p in folder.iterdir()) == ["dhkin-kernels.sha256"]
-
-
-# --------------------------------------------------------------------------------------------
-# the kernel cache: a read-only install, for real
+# IK from a read-only install, for real
 
 
 def _drop_capabilities() -> None:
@@ -369,7 +314,7 @@ def _drop_capabilities() -> None:
 
 
 #: Run first in the child where the kernel does not enforce the read-only folders (see the
-#: module docstring): tempfile.TemporaryFile, the test numba and dhkin use, refuses them.
+#: module docstring): tempfile.TemporaryFile, the usual test of a folder, refuses them.
 SIMULATED_READ_ONLY = """
 import sys, tempfile
 read_only = tuple(sys.argv.pop(1).split("|"))
@@ -392,7 +337,7 @@ sys.exit(main(sys.argv[1:]))
 class ReadOnlyInstall:
     """A copy of the package made read-only, and how to run a restricted process on it."""
 
-    def __init__(self, root: Path, prebuilt: Path | None = None) -> None:
+    def __init__(self, root: Path) -> None:
         self.root = root
         self.site = root / "site"
         shutil.copytree(Path(dhkin.__file__).parent, self.site / "dhkin",
@@ -401,8 +346,6 @@ class ReadOnlyInstall:
         if not (self.site / "dhkin" / core.name).exists():
             shutil.copy2(core, self.site / "dhkin" / core.name)
         shutil.copytree(builtin_dir(), self.site / "dhkin" / "robots", dirs_exist_ok=True)
-        if prebuilt is not None:
-            shutil.copytree(prebuilt, self.site / "dhkin" / "ik" / "compiled" / "__pycache__")
         self.no_home = root / "read-only" / "home"  # in a folder nobody may write
         self.temporary = root / "tmp"
         self.temporary.mkdir(mode=0o777)
@@ -434,12 +377,6 @@ class ReadOnlyInstall:
                               capture_output=True, text=True, preexec_fn=self._restrict(),
                               timeout=900)
 
-    def kernel_folder(self, temporary: Path | None = None) -> Path:
-        """Where a process of this install caches its kernels in ``temporary``."""
-        package = Path(os.path.realpath(self.site / "dhkin" / "ik" / "compiled"))
-        return ((temporary or self.temporary) / f"dhkin-{os.geteuid()}" / "numba"
-                / cache._installation_key(package))
-
 
 @contextlib.contextmanager
 def _removable(root: Path) -> Iterator[Path]:
@@ -457,41 +394,13 @@ def read_only_root() -> Iterator[Path]:
 
 
 def test_ik_from_a_read_only_install(read_only_root) -> None:
-    """`dhkin ik` from a read-only package with no usable HOME: the closed-form IK (the compiled
-    core) answers and writes nothing; the general 6R solver's numba kernels are cached in a
-    folder of the user's own in the temporary folder and loaded the next time; a second
-    read-only install shipping that cache as its pre-built one loads it instead of compiling;
-    with nothing writable at all, kernels compile in memory after one warning line."""
+    """`dhkin ik` from a read-only package with no usable HOME: the closed-form IK and the
+    general 6R solver (both in the compiled core) answer, and write nothing anywhere."""
     install = ReadOnlyInstall(read_only_root / "first")
     first = install.run(*IK_ARGS)
     assert first.returncode == 0, first.stderr
     assert first.stdout.startswith("8 solutions") and first.stderr == ""
-    folder = install.kernel_folder()
-    assert not folder.exists()  # nothing compiled, nothing cached
     general = install.run(*GENERAL_IK_ARGS)
     assert general.returncode == 0 and "solutions" in general.stdout, general.stderr
-    assert (folder / cache.STAMP_NAME).is_file() and list(folder.glob("*.nbc"))
-    again = install.run(*GENERAL_IK_ARGS, env={"NUMBA_DEBUG_CACHE": "1"})
-    assert again.returncode == 0 and "solutions" in again.stdout
-    assert "data loaded from" in again.stdout and "data saved to" not in again.stdout
-
-    shipped = ReadOnlyInstall(read_only_root / "shipped", prebuilt=folder)
-    seeded = shipped.run(*GENERAL_IK_ARGS, env={"NUMBA_DEBUG_CACHE": "1"})
-    assert seeded.returncode == 0 and "solutions" in seeded.stdout, seeded.stderr
-    assert str(shipped.kernel_folder()) in seeded.stdout  # loaded from the seeded copy
-    assert "data saved to" not in seeded.stdout  # nothing compiled
-
-    script = ("import sys, tempfile; tempfile.tempdir = sys.argv[1]\n"
-              "from dhkin.ik.compiled import jit, elementary\n"
-              "assert not jit.CACHE\nprint(elementary.sincos(0.0))\n")
-    compiled = subprocess.run(
-        [sys.executable, "-c", (SIMULATED_READ_ONLY if not shipped.enforced else "") + script,
-         *([f"{shipped.site}|{shipped.root / 'read-only'}"] if not shipped.enforced else []),
-         str(shipped.no_home)],
-        env={"PATH": os.environ.get("PATH", ""), "PYTHONPATH": str(shipped.site),
-             "HOME": str(shipped.no_home)}, capture_output=True, text=True,
-        preexec_fn=shipped._restrict(), timeout=300)
-    assert compiled.returncode == 0, compiled.stderr
-    assert compiled.stdout.strip() == "(0.0, 1.0)"
-    assert compiled.stderr.startswith("dhkin: warning: no writable folder for the compiled IK")
-    assert compiled.stderr.count("\n") == 1
+    assert general.stderr == ""
+    assert list(install.temporary.iterdir()) == []  # nothing compiled, nothing cached

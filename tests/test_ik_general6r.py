@@ -402,3 +402,19 @@ def test_far_pose_on_the_command_line_is_one_line(capsys: pytest.CaptureFixture[
                          "0", "0", "0")
     assert code == 1 and err == ""
     assert out.count("\n") == 1 and "out of reach" in out
+
+
+def test_general_solver_imports_no_jit_compiler() -> None:
+    """Issue 26: the general 6R solver runs in the compiled core; neither ``import dhkin`` nor
+    its first answer imports numba (nothing is compiled at run time)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np, dhkin\n"
+            "robot = dhkin.load('xarm6')\n"
+            "assert len(robot.ik(robot.fk(np.full(6, 0.3)))) > 0\n"
+            "print('numba' in sys.modules)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "False"

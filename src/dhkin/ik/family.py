@@ -14,7 +14,7 @@ origin by up to millimetres and milliradians. A family is therefore chosen withi
    axes that should be parallel, distance between axes that should meet) at most the band.
 3. The closed form solves the ideal model; when the exact chain differs from it (any snapped
    value, any correction), every branch is refined on the exact chain (damped Newton) and
-   verified there (:mod:`dhkin.ik.compiled.pipeline`).
+   verified there (``cpp/dhkin/pipeline.hpp``).
 
 The band is physical: :data:`BAND` = 0.02 rad (1.15 degrees) and 2 mm. It is ten times the
 largest structural deviation of the real calibrated UR5e of ``robots/vendor`` (see

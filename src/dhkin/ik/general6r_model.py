@@ -1,6 +1,6 @@
 """A six-revolute chain as a standard-DH model, and the elimination's constant coefficients.
 
-Conventions. The exact chain of a table (:func:`dhkin.ik.plan.chain_array`, corrections
+Conventions. The exact chain of a table (:func:`dhkin.ik.plan.chain_parts`, corrections
 included) is ``T_dh(q) = P_1 Z(v_1) P_2 Z(v_2) ... P_6 Z(v_6) P_tail`` (DH frame 0 -> DH
 frame 6, metres), ``Z = Rz``, ``v_j = direction_j q_j + offset_j``. :func:`refit` writes it as
 

@@ -50,21 +50,6 @@ def chain_parts(table: DHTable) -> dict[str, NDArray[Any]]:
             "tail": after}
 
 
-def chain_array(table: DHTable) -> NDArray[np.float64]:
-    """:func:`chain_parts` in the numba kernels' layout (n + 1, 15): per joint P_j (3 x 4,
-    row-major), revolute (1.0 / 0.0), direction and offset; the last row P_tail. Used by the
-    general 6R solver (dhkin.ik.compiled.chain) until it moves into the core."""
-    parts = chain_parts(table)
-    n = table.dof
-    chain = np.zeros((n + 1, 15))
-    chain[:n, :12] = parts["before"][:, :3].reshape(n, 12)
-    chain[:n, 12] = parts["revolute"]
-    chain[:n, 13] = parts["direction"]
-    chain[:n, 14] = parts["offset"]
-    chain[n, :12] = parts["tail"][:3].ravel()
-    return chain
-
-
 def plan_fields(table: DHTable, fit: FamilyFit) -> dict[str, Any]:
     """The plan of the compiled core (``dhkin._core.ClosedForm``): family, bands, geometry,
     exact and ideal chains, the continuation path between them and the joint limits."""

@@ -13,7 +13,7 @@ never the validator's crash, exit or hang.
   which, and reading stops there (a generator that never ends is not drained).
 * **Time**: each call (reading its output included) has :data:`DEFAULT_CALL_TIMEOUT` seconds, or
   the run's ``timeout``. In the main thread of a Unix process a SIGALRM timer interrupts a
-  pure-Python IK when its time is up (code in C or numba is interrupted when it returns to
+  pure-Python IK when its time is up (compiled code is interrupted when it returns to
   Python); elsewhere an overlong call is reported once it returns. An IK that swallows every
   exception (``except BaseException``) can outlive its timer: run it isolated.
 * **Isolation** (``isolate=True``): every call runs in a child process (multiprocessing; fork
@@ -56,9 +56,9 @@ KEPT_OF_A_BAD_ANSWER = 16
 
 
 #: Time limit of one IK call (s), reading its output included. Generous: dhkin's own IK answers
-#: in ~0.1 ms, but its first call compiles the numba kernels (15-41 s on an idle 2-core machine,
-#: several times that on a loaded one), and a slow numerical IK in Python may take seconds; five
-#: minutes covers those, while a hung call no longer hangs the run.
+#: in ~0.1 ms, but a slow numerical IK in Python may take seconds, and a peer library's first
+#: call may compile a JIT (15-41 s on an idle 2-core machine, several times that on a loaded
+#: one); five minutes covers those, while a hung call no longer hangs the run.
 DEFAULT_CALL_TIMEOUT = 300.0
 
 

@@ -36,7 +36,8 @@ struct ChainJoint {
   double offset = 0.0;
 
   // The DH variable (theta or d) at joint value q.
-  double motion(double q) const { return direction * q + offset; }
+  template <class V>
+  V motion(V q) const { return direction * q + offset; }
 };
 
 struct Chain {
@@ -47,19 +48,21 @@ struct Chain {
 };
 
 // f = f * Z(v): the joint's motion.
-inline void apply_motion(Frame& f, const ChainJoint& joint, double q) {
-  const double v = joint.motion(q);
+template <class V>
+inline void apply_motion(FrameT<V>& f, const ChainJoint& joint, V q) {
+  const V v = joint.motion(q);
   if (joint.revolute) {
-    const SinCos t = sincos(v);
+    const SinCosT<V> t = sincos(v);
     turn_about_z(f, t.c, t.s);
   } else {
     slide_along_z(f, v);
   }
 }
 
-// T(q), DH frame 0 -> DH frame n; q has chain.dof() values.
-inline Frame fk(const Chain& chain, const double* q) {
-  Frame state = chain.joints[0].before;
+// T(q), DH frame 0 -> DH frame n; q has chain.dof() values (per lane: kLanes joint vectors).
+template <class V>
+inline FrameT<V> fk(const Chain& chain, const V* q) {
+  FrameT<V> state = broadcast<V>(chain.joints[0].before);
   apply_motion(state, chain.joints[0], q[0]);
   const int n = chain.dof();
   for (int j = 1; j < n; ++j) {
@@ -82,37 +85,49 @@ inline void fk_frames(const Chain& chain, const double* q, Frame* frames) {
   frames[n] = state * chain.tail;
 }
 
-// Position (m) and rotation (rad) error of a frame against a target.
-struct PoseError {
-  double position = 0.0;
-  double rotation = 0.0;
+// Position (m) and rotation (rad) error of a frame against a target (per lane).
+template <class V>
+struct PoseErrorT {
+  V position{};
+  V rotation{};
 
-  double largest() const { return position > rotation ? position : rotation; }
+  V largest() const { return select(position > rotation, position, rotation); }
   // Both errors at most `tolerance` (false for NaN).
-  bool within(double tolerance) const { return position <= tolerance && rotation <= tolerance; }
+  MaskOf<V> within(double tolerance) const {
+    return position <= tolerance && rotation <= tolerance;
+  }
 };
+using PoseError = PoseErrorT<double>;
+
+// Lane l of errors of lanes.
+inline PoseError lane(const PoseErrorT<Lanes>& e, int l) {
+  return {lane(e.position, l), lane(e.rotation, l)};
+}
 
 // The error of `state` against `target`: |p - p_t| and the angle of R^T R_t, computed as
 // atan2(s, c) with s = |vee(E - E^T)| / 2, c = (trace E - 1) / 2, E = R^T R_t.
-inline PoseError pose_error(const Frame& state, const Frame& target) {
-  double e[3][3];
+template <class V, class W>
+inline PoseErrorT<Product<V, W>> pose_error(const FrameT<V>& state, const FrameT<W>& target) {
+  using T = Product<V, W>;
+  T e[3][3];
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
       e[r][c] = state.R[0][r] * target.R[0][c] + state.R[1][r] * target.R[1][c] +
                 state.R[2][r] * target.R[2][c];
     }
   }
-  const double dx = state.p[0] - target.p[0], dy = state.p[1] - target.p[1],
-               dz = state.p[2] - target.p[2];
-  const double s = 0.5 * std::sqrt((e[2][1] - e[1][2]) * (e[2][1] - e[1][2]) +
-                                    (e[0][2] - e[2][0]) * (e[0][2] - e[2][0]) +
-                                    (e[1][0] - e[0][1]) * (e[1][0] - e[0][1]));
-  const double c = 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0);
-  return {std::sqrt(dx * dx + dy * dy + dz * dz), atan2(s, c)};
+  const T dx = state.p[0] - target.p[0], dy = state.p[1] - target.p[1],
+          dz = state.p[2] - target.p[2];
+  const T s = 0.5 * sqrt((e[2][1] - e[1][2]) * (e[2][1] - e[1][2]) +
+                         (e[0][2] - e[2][0]) * (e[0][2] - e[2][0]) +
+                         (e[1][0] - e[0][1]) * (e[1][0] - e[0][1]));
+  const T c = 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0);
+  return {sqrt(dx * dx + dy * dy + dz * dz), atan2(s, c)};
 }
 
 // The error of T(q) against `target`.
-inline PoseError check(const Chain& chain, const double* q, const Frame& target) {
+template <class V, class W>
+inline PoseErrorT<Product<V, W>> check(const Chain& chain, const V* q, const FrameT<W>& target) {
   return pose_error(fk(chain, q), target);
 }
 

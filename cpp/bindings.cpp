@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "dhkin/batch.hpp"
 #include "dhkin/chain.hpp"
 #include "dhkin/expand.hpp"
 #include "dhkin/pipeline.hpp"
@@ -404,6 +405,35 @@ class ClosedForm {
     }
   }
 
+  // N poses without copies (one solution per branch, its in-limit copy nearest the seed)
+  // straight into the result arrays q (N, 8, 6), valid, branch, flags (N, 8), errors (N, 8, 2),
+  // projection and dropped (N): expand(copies = false) after principal(), pose by pose, bit for
+  // bit. Slots without a solution are left as given. Returns (index of the first pose whose
+  // status is not usable or -1, its status, the most solutions of any pose); poses after a
+  // rejected one are not solved.
+  std::tuple<long, int, int> nearest(
+      Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
+      double tolerance, Input<double, nb::shape<2, 4, 4>> frames,
+      Output<double, nb::shape<-1, kBranches, kDof>> q, Output<bool, nb::shape<-1, kBranches>> valid,
+      Output<std::int16_t, nb::shape<-1, kBranches>> branch,
+      Output<std::uint8_t, nb::shape<-1, kBranches>> flags,
+      Output<double, nb::shape<-1, kBranches, 2>> errors, Output<double, nb::ndim<1>> projection,
+      Output<std::int64_t, nb::ndim<1>> dropped) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {q.shape(0), valid.shape(0), branch.shape(0), flags.shape(0),
+                                   errors.shape(0), projection.shape(0), dropped.shape(0)});
+    const dhkin::TargetFrames target = target_frames(frames);
+    dhkin::Plan storage;
+    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    const dhkin::NearestOutputs out{q.data(), valid.data(), branch.data(), flags.data(),
+                                    errors.data(), projection.data(), dropped.data()};
+    nb::gil_scoped_release release;
+    const dhkin::BatchReport report =
+        dhkin::solve_nearest(plan, target, targets.data(), n, seeds.data(),
+                             seeds.shape(0) == 1 ? 0 : kDof, tolerance, out);
+    return {report.rejected, report.status, report.width};
+  }
+
   // Whether the direct path answers each of N poses (the rest take the full pipeline); with
   // `direct` false, principal() skips the direct path (tests compare the two answers).
   void direct_answers(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
@@ -623,6 +653,8 @@ NB_MODULE(_core, m) {
       .def("principal", &ClosedForm::principal, "targets"_a, "seeds"_a, "tolerance"_a,
            "frames"_a, "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "totals"_a, "why"_a,
            "info"_a, "direct"_a = true)
+      .def("nearest", &ClosedForm::nearest, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,
+           "q"_a, "valid"_a, "branch"_a, "flags"_a, "errors"_a, "projection"_a, "dropped"_a)
       .def("direct_answers", &ClosedForm::direct_answers, "targets"_a, "seeds"_a,
            "tolerance"_a, "frames"_a, "answered"_a)
       .def("expand", &ClosedForm::expand, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,

@@ -25,6 +25,24 @@ struct PoseTargets {
   Frame T_at;  // T_dh followed by the TCP point: the target of the plan's chains
 };
 
+// Step 1 without the bookkeeping: the pose's status (a PoseStatus; the seed's too), the
+// projection's size and the targets. False when the pose is not usable.
+inline bool pose_targets(const TargetFrames& frames, const double* T, const Joints& seed,
+                         int& status, double& projection, PoseTargets& targets) {
+  status = pose_status(T);
+  if (status != kUsable) return false;
+  for (double v : seed) {
+    if (!std::isfinite(v)) {
+      status = kBadSeed;
+      return false;
+    }
+  }
+  const Frame projected = projected_frame(T, projection);
+  targets.T_dh = frames.to_dh(projected);
+  targets.T_at = moved_to(targets.T_dh, frames.tcp_point);
+  return true;
+}
+
 // Step 1: the pose and the seed checked (a rejection goes to info.status), the rotation
 // projected (info.projection) and the targets computed. False when the pose is not usable.
 inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints& seed,
@@ -33,18 +51,7 @@ inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints
   info.why.fill(NAN);
   branches.ok.fill(false);
   branches.flags.fill(0);
-  info.status = pose_status(T);
-  if (info.status != kUsable) return false;
-  for (double v : seed) {
-    if (!std::isfinite(v)) {
-      info.status = kBadSeed;
-      return false;
-    }
-  }
-  const Frame projected = projected_frame(T, info.projection);
-  targets.T_dh = frames.to_dh(projected);
-  targets.T_at = moved_to(targets.T_dh, frames.tcp_point);
-  return true;
+  return pose_targets(frames, T, seed, info.status, info.projection, targets);
 }
 
 // Steps 1-3 for a regular pose of an exact-family table; false (outputs undefined) for a pose

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #if defined(__AVX512F__) || defined(__AVX__) || defined(__SSE2__)
 #include <immintrin.h>
@@ -108,6 +109,13 @@ struct Lanes {
     out.v = x;
     return out;
   }
+  // kLanes consecutive doubles from memory, and back.
+  static Lanes load(const double* data) {
+    Lanes out;
+    std::memcpy(&out.v, data, sizeof out.v);
+    return out;
+  }
+  void store(double* data) const { std::memcpy(data, &v, sizeof v); }
   // Lane l of values at `data` with this stride (doubles).
   static Lanes gather(const double* data, int stride) {
     return of(simd::DoubleVector{data[0], data[stride], data[2 * stride], data[3 * stride],
@@ -161,6 +169,32 @@ inline Lanes copysign(Lanes magnitude, Lanes sign) {
   const simd::IntVector m = (simd::IntVector)magnitude.v, s = (simd::IntVector)sign.v;
   return Lanes::of((simd::DoubleVector)((m & ~simd::kSignBit) | (s & simd::kSignBit)));
 }
+// floor, ceil and nearbyint (half to even) lane by lane, as the C library's: x + 1.5 * 2^52
+// rounds |x| < 2^51 to a whole number; the sign of x is kept (-0.3 gives -0); larger values and
+// NaN go to the C library.
+namespace simd {
+constexpr double kWholeRounder = 6755399441055744.0;  // 1.5 * 2^52
+template <class Round>
+inline Lanes whole(Lanes x, Round&& c_library, int direction) {
+  const Lanes nearest = Lanes::of((x.v + kWholeRounder) - kWholeRounder);
+  Lanes out = direction < 0   ? select(nearest > x, nearest - 1.0, nearest)
+              : direction > 0 ? select(nearest < x, nearest + 1.0, nearest)
+                              : nearest;
+  out = copysign(out, x);
+  const Mask outside = !(abs(x) < 2251799813685248.0);  // 2^51
+  if (any(outside)) {
+    for (int l = 0; l < kLanes; ++l) {
+      if (outside.v[l] != 0) out.v[l] = c_library(x.v[l]);
+    }
+  }
+  return out;
+}
+}  // namespace simd
+inline Lanes floor(Lanes x) { return simd::whole(x, [](double v) { return std::floor(v); }, -1); }
+inline Lanes ceil(Lanes x) { return simd::whole(x, [](double v) { return std::ceil(v); }, 1); }
+inline Lanes nearbyint(Lanes x) {
+  return simd::whole(x, [](double v) { return std::nearbyint(v); }, 0);
+}
 inline double lane(Lanes a, int l) { return a.v[l]; }
 inline void set_lane(Lanes& a, int l, double x) { a.v[l] = x; }
 
@@ -200,6 +234,9 @@ inline double min(double a, double b) { return b < a ? b : a; }
 inline double sqrt(double a) { return std::sqrt(a); }
 inline double abs(double a) { return std::fabs(a); }
 inline double copysign(double magnitude, double sign) { return std::copysign(magnitude, sign); }
+inline double floor(double a) { return std::floor(a); }
+inline double ceil(double a) { return std::ceil(a); }
+inline double nearbyint(double a) { return std::nearbyint(a); }
 
 // What a lane type comes with: its mask, its small integers, its number of lanes.
 template <class V>
@@ -225,6 +262,14 @@ template <class V>
 using BitsOf = typename LaneTraits<V>::BitsType;
 template <class V>
 constexpr int kWidth = LaneTraits<V>::width;
+
+// A condition that holds in every lane or in none.
+template <class V>
+inline MaskOf<V> every_lane(bool m);
+template <>
+inline bool every_lane<double>(bool m) { return m; }
+template <>
+inline Mask every_lane<Lanes>(bool m) { return uniform(m); }
 
 // `bit` where `m` holds, else none.
 inline std::uint8_t bits_if(bool m, std::uint8_t bit) { return m ? bit : 0; }

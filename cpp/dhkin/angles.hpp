@@ -76,11 +76,7 @@ inline std::int64_t rounded_bits(double shifted) {
   std::memcpy(&bits, &shifted, sizeof bits);
   return bits;
 }
-inline LaneBits rounded_bits(Lanes shifted) {
-  LaneBits out;
-  out.v = (simd::IntVector)shifted.v;  // the same bits
-  return out;
-}
+DHKIN_INLINE LaneBits rounded_bits(Lanes shifted) { return bits_of(shifted); }
 
 // atan(k / 8) for the integer k in the low bits of `bits` (lanes outside 0..8 read entry 8;
 // their result is not used).
@@ -88,16 +84,18 @@ inline double atan_table(std::int64_t bits) {
   const std::int64_t k = bits & 15;
   return kAtanTable[k < 8 ? k : 8];
 }
-inline Lanes atan_table(LaneBits bits) {
-  Lanes out;
-  for (int l = 0; l < kLanes; ++l) out.v[l] = atan_table(bits.v[l]);
-  return out;
+DHKIN_INLINE Lanes atan_table(const LaneBits& bits) {
+  alignas(64) std::int64_t index[kLanes];
+  alignas(64) double out[kLanes];
+  std::memcpy(index, &bits.v, sizeof index);
+  for (int l = 0; l < kLanes; ++l) out[l] = atan_table(index[l]);
+  return Lanes::load(out);
 }
 
 // (sin x, cos x) for |x| < 2^19: reduction by multiples of pi/2, Taylor polynomials on
 // [-pi/4, pi/4], the quadrant by selects, not branches (vectorisable).
 template <class V>
-inline SinCosT<V> sincos_reduced(V x) {
+DHKIN_INLINE SinCosT<V> sincos_reduced(V x) {
   const V shifted = x * kTwoOverPi + kRounder;
   const V k = shifted - kRounder;
   const auto quadrant = rounded_bits(shifted);  // k mod 4 in the low bits
@@ -122,9 +120,9 @@ inline SinCosT<V> sincos_reduced(V x) {
 
 // (sin x, cos x), each within ~2 ulp; beyond 2^19, NaN and infinities: the C library.
 template <class V>
-inline SinCosT<V> sincos(V x) {
+DHKIN_INLINE SinCosT<V> sincos(V x) {
   SinCosT<V> out = elementary::sincos_reduced(x);
-  for_each_lane(!(abs(x) < elementary::kReductionLimit), [&](int l) {
+  for_each_lane(outside(x, elementary::kReductionLimit), [&](int l) {
     set_lane(out.s, l, std::sin(lane(x, l)));
     set_lane(out.c, l, std::cos(lane(x, l)));
   });
@@ -135,7 +133,7 @@ inline SinCosT<V> sincos(V x) {
 // NaN (those inputs go to it). Reduction to t = min/max of |x|, |y| in [0, 1], then
 // atan(t) = atan(k/8) + atan((t - k/8) / (1 + t k/8)).
 template <class V>
-inline V atan2(V y, V x) {
+DHKIN_INLINE V atan2(V y, V x) {
   using namespace elementary;
   const V ax = abs(x), ay = abs(y);
   const auto steep = ay > ax;
@@ -160,14 +158,16 @@ inline V atan2(V y, V x) {
 // value wrapped to (-pi, pi] (-pi itself becomes pi): whole turns taken off by Cody and Waite's
 // reduction (k * 2pi's head is exact), beyond 2^19 by the C library's exact fmod.
 template <class V>
-inline V wrap(V value) {
+DHKIN_INLINE V wrap(V value) {
   using namespace elementary;
+  const auto inside = -kPi < value && value <= kPi;
+  if (all(inside)) return value;  // most values (the reduction below keeps them as they are)
   const V k = (value * (0.25 * kTwoOverPi) + kRounder) - kRounder;  // value / 2pi, rounded
   V r = (value - k * (4.0 * kHalfPiHead)) - k * (4.0 * kHalfPiTail);  // 2pi = 4 (pi/2)
   r = select(r <= -kPi, r + kTwoPi, r);
   r = select(r > kPi, r - kTwoPi, r);
-  r = select(-kPi < value && value <= kPi, value, r);
-  for_each_lane(!(abs(value) < kReductionLimit), [&](int l) {
+  r = select(inside, value, r);
+  for_each_lane(outside(value, kReductionLimit), [&](int l) {
     double remainder = std::fmod(kPi - lane(value, l), kTwoPi);
     if (remainder < 0.0) remainder += kTwoPi;
     const double wrapped = kPi - remainder;

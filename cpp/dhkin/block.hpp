@@ -65,6 +65,23 @@ struct FrameColumns {
 
 }  // namespace block
 
+// Whether a and b hold the same bits in every lane.
+// check() of each branch's candidate q[b] (lanes: poses) against `target`, for the branches
+// `wanted` in some lane: every joint's sine and cosine first (independent work for the
+// processor to overlap), then each branch's chain.
+inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
+                           const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
+                           std::array<PoseErrorT<Lanes>, kBranches>& errors) {
+  const ChainShape shape(chain);
+  std::array<JointMotions<Lanes>, kBranches> motions;
+  for (int b = 0; b < kBranches; ++b) {
+    if (wanted[b]) joint_motions(chain, q[b].data(), motions[b]);
+  }
+  for (int b = 0; b < kBranches; ++b) {
+    if (wanted[b]) errors[b] = pose_error(chain_frame(chain, shape, motions[b]), target);
+  }
+}
+
 // Steps 1-3 of the direct path for a block of poses of an exact-family table (plan.refine
 // false; the caller checks).
 inline void direct_block(const Plan& plan, const TargetFrames& frames, const PoseBlock& poses,
@@ -93,14 +110,18 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
   out.why = found.why;
   for (int b = 0; b < kBranches; ++b) declined = declined || (found.near[b] & kFree) != 0;
+  std::array<bool, kBranches> wanted{};
   for (int b = 0; b < kBranches; ++b) {
     out.ok[b] = found.valid[b] && !declined;
     JointsT<Lanes>& q = out.q[b];
     q = found.q[b];
     plan.wrap_revolute(q);
-    if (!any(out.ok[b])) continue;
-    for (int j = 0; j < kDof; ++j) q[j] = select(out.ok[b], q[j], Lanes(0.0));
-    out.errors[b] = check(plan.chain, q.data(), out.T_at);
+    wanted[b] = any(out.ok[b]);
+    // lanes without a candidate are checked on zeros (finite values; their errors are not used)
+    for (int j = 0; j < kDof && wanted[b]; ++j) q[j] = select(abs(q[j]) < INFINITY, q[j], Lanes(0.0));
+  }
+  check_branches(plan.chain, out.q, wanted, out.T_at, out.errors);
+  for (int b = 0; b < kBranches; ++b) {
     declined = declined || (out.ok[b] && !out.errors[b].within(tolerance));
   }
   for (int a = 0; a < kBranches; ++a) {

@@ -49,7 +49,7 @@ struct Chain {
 
 // f = f * Z(v): the joint's motion.
 template <class V>
-inline void apply_motion(FrameT<V>& f, const ChainJoint& joint, V q) {
+DHKIN_INLINE void apply_motion(FrameT<V>& f, const ChainJoint& joint, V q) {
   const V v = joint.motion(q);
   if (joint.revolute) {
     const SinCosT<V> t = sincos(v);
@@ -59,17 +59,148 @@ inline void apply_motion(FrameT<V>& f, const ChainJoint& joint, V q) {
   }
 }
 
+// How the rotation of a constant frame P mixes columns: where every column of P.R is one +-1 and
+// zeros (a DH table's rotations about a right angle), column c of state * P is +- column
+// source[c] of state; and the nonzero entries of P.p.
+struct ConstantShape {
+  // The rotations of DH tables, with straight-line code of their own: the identity, and the
+  // turns by +90, -90 and 180 degrees about x (columns 1 and 2 swapped and signed).
+  enum Kind { kGeneral, kIdentity, kTurnX90, kTurnXMinus90, kTurnX180 };
+  Kind kind = kGeneral;
+  bool permutation = true;
+  int source[3] = {0, 1, 2};
+  bool negate[3] = {false, false, false};
+  int moving[3] = {0, 0, 0};  // indices of the nonzero entries of P.p, in order
+  int moves = 0;
+
+  ConstantShape() = default;
+  explicit ConstantShape(const Frame& P) {
+    for (int c = 0; c < 3; ++c) {
+      int nonzero = 0;
+      for (int k = 0; k < 3; ++k) {
+        if (P.R[k][c] == 0.0) continue;
+        ++nonzero;
+        source[c] = k;
+        negate[c] = P.R[k][c] < 0.0;
+        permutation = permutation && (P.R[k][c] == 1.0 || P.R[k][c] == -1.0);
+      }
+      permutation = permutation && nonzero == 1;
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (P.p[k] != 0.0) moving[moves++] = k;
+    }
+    if (!permutation || source[0] != 0 || negate[0]) return;
+    if (source[1] == 1 && source[2] == 2) {
+      kind = !negate[1] && !negate[2] ? kIdentity : negate[1] && negate[2] ? kTurnX180 : kGeneral;
+    } else if (source[1] == 2 && source[2] == 1) {  // column 1 = +-column 2, column 2 = -+column 1
+      kind = !negate[1] && negate[2] ? kTurnX90 : negate[1] && !negate[2] ? kTurnXMinus90 : kGeneral;
+    }
+  }
+};
+
+// state = state * P for a constant frame P of this shape: operator* of frame.hpp without the
+// terms whose factor of P is zero, and +-1 factors applied as signs. The same sums in the same
+// order, so the same values short of the sign of a zero.
+template <class V>
+DHKIN_INLINE void times_constant(FrameT<V>& state, const Frame& P, const ConstantShape& shape) {
+  if (!shape.permutation) {
+    state = state * P;
+    return;
+  }
+  for (int r = 0; r < 3; ++r) {
+    V* row = state.R[r];
+    if (shape.moves > 0) {  // the translation first: it reads the row before it turns
+      V sum = row[shape.moving[0]] * P.p[shape.moving[0]];
+      for (int t = 1; t < shape.moves; ++t) sum = sum + row[shape.moving[t]] * P.p[shape.moving[t]];
+      state.p[r] = sum + state.p[r];
+    }
+    switch (shape.kind) {
+      case ConstantShape::kIdentity:
+        break;
+      case ConstantShape::kTurnX90: {
+        const V column1 = row[1];
+        row[1] = row[2], row[2] = -column1;
+        break;
+      }
+      case ConstantShape::kTurnXMinus90: {
+        const V column1 = row[1];
+        row[1] = -row[2], row[2] = column1;
+        break;
+      }
+      case ConstantShape::kTurnX180:
+        row[1] = -row[1], row[2] = -row[2];
+        break;
+      default: {
+        const V a[3] = {row[0], row[1], row[2]};
+        for (int c = 0; c < 3; ++c) row[c] = shape.negate[c] ? -a[shape.source[c]] : a[shape.source[c]];
+      }
+    }
+  }
+}
+
+// The shapes of the constant frames of a chain of at most kDof joints.
+struct ChainShape {
+  ConstantShape before[kDof];
+  ConstantShape tail;
+
+  explicit ChainShape(const Chain& chain) : tail(chain.tail) {
+    for (int j = 0; j < chain.dof() && j < kDof; ++j) before[j] = ConstantShape(chain.joints[j].before);
+  }
+};
+
+// The joints' motions at q: each revolute joint's sine and cosine, each DH variable.
+template <class V>
+struct JointMotions {
+  SinCosT<V> turn[kDof];
+  V variable[kDof];
+};
+
+// Joint j's motion at value q.
+template <class V>
+DHKIN_INLINE void joint_motion(const Chain& chain, int j, V q, JointMotions<V>& out) {
+  const ChainJoint& joint = chain.joints[j];
+  out.variable[j] = joint.motion(q);
+  if (joint.revolute) out.turn[j] = sincos(out.variable[j]);
+}
+
+template <class V>
+DHKIN_INLINE void joint_motions(const Chain& chain, const V* q, JointMotions<V>& out) {
+  for (int j = 0; j < chain.dof(); ++j) joint_motion(chain, j, q[j], out);
+}
+
+// T(q) of a chain of at most kDof joints from its motions at q.
+template <class V>
+DHKIN_INLINE FrameT<V> chain_frame(const Chain& chain, const ChainShape& shape,
+                                   const JointMotions<V>& motions) {
+  FrameT<V> state = broadcast<V>(chain.joints[0].before);
+  for (int j = 0; j < chain.dof(); ++j) {
+    if (j > 0) times_constant(state, chain.joints[j].before, shape.before[j]);
+    if (chain.joints[j].revolute) {
+      turn_about_z(state, motions.turn[j].c, motions.turn[j].s);
+    } else {
+      slide_along_z(state, motions.variable[j]);
+    }
+  }
+  times_constant(state, chain.tail, shape.tail);
+  return state;
+}
+
 // T(q), DH frame 0 -> DH frame n; q has chain.dof() values (per lane: kLanes joint vectors).
 template <class V>
 inline FrameT<V> fk(const Chain& chain, const V* q) {
+  if (chain.dof() <= kDof) {
+    JointMotions<V> motions;
+    joint_motions(chain, q, motions);
+    return chain_frame(chain, ChainShape(chain), motions);
+  }
   FrameT<V> state = broadcast<V>(chain.joints[0].before);
   apply_motion(state, chain.joints[0], q[0]);
-  const int n = chain.dof();
-  for (int j = 1; j < n; ++j) {
-    state = state * chain.joints[j].before;
+  for (int j = 1; j < chain.dof(); ++j) {
+    times_constant(state, chain.joints[j].before, ConstantShape(chain.joints[j].before));
     apply_motion(state, chain.joints[j], q[j]);
   }
-  return state * chain.tail;
+  times_constant(state, chain.tail, ConstantShape(chain.tail));
+  return state;
 }
 
 // The frame each joint moves about (before its motion), frames[j] for j < n, and T(q) in
@@ -107,7 +238,7 @@ inline PoseError lane(const PoseErrorT<Lanes>& e, int l) {
 // The error of `state` against `target`: |p - p_t| and the angle of R^T R_t, computed as
 // atan2(s, c) with s = |vee(E - E^T)| / 2, c = (trace E - 1) / 2, E = R^T R_t.
 template <class V, class W>
-inline PoseErrorT<Product<V, W>> pose_error(const FrameT<V>& state, const FrameT<W>& target) {
+DHKIN_INLINE PoseErrorT<Product<V, W>> pose_error(const FrameT<V>& state, const FrameT<W>& target) {
   using T = Product<V, W>;
   T e[3][3];
   for (int r = 0; r < 3; ++r) {

@@ -34,7 +34,7 @@ constexpr double kInverseTwoPi = 1.0 / kTwoPi;
 // The copies of `value` inside [lower - slack, upper + slack]; a prismatic value has one copy
 // (turn 0) when inside.
 template <class V>
-inline TurnRangeT<V> turn_range(const JointLimit& limit, bool revolute, V value, double slack) {
+DHKIN_INLINE TurnRangeT<V> turn_range(const JointLimit& limit, bool revolute, V value, double slack) {
   if (revolute) {
     const V lo = ceil((limit.lower - slack - value) * kInverseTwoPi);
     const V hi = floor((limit.upper + slack - value) * kInverseTwoPi);
@@ -59,7 +59,7 @@ struct NearestTurn {
 };
 
 template <class V>
-inline NearestTurn<V> nearest_turn(const JointLimit& limit, bool revolute, V value, double slack,
+DHKIN_INLINE NearestTurn<V> nearest_turn(const JointLimit& limit, bool revolute, V value, double slack,
                                    V aim) {
   const TurnRangeT<V> range = turn_range<V>(limit, revolute, value, slack);
   const auto exists = range.count > 0.0;
@@ -78,11 +78,11 @@ inline bool nearest_turn(const JointLimit& limit, bool revolute, double value, d
 
 // value + 2pi turn (revolute), set onto the nearer limit when it lies outside.
 template <class V>
-inline V shifted(bool revolute, V value, V turn) {
+DHKIN_INLINE V shifted(bool revolute, V value, V turn) {
   return revolute ? value + kTwoPi * turn : value;
 }
 template <class V>
-inline V placed(const JointLimit& limit, bool revolute, V value, V turn) {
+DHKIN_INLINE V placed(const JointLimit& limit, bool revolute, V value, V turn) {
   return min(max(shifted(revolute, value, turn), V(limit.lower)), V(limit.upper));
 }
 inline double placed(const JointLimit& limit, bool revolute, double value, long turn) {

@@ -23,27 +23,27 @@ template <class A, class B>
 using Product = decltype(A{} * B{});
 
 template <class A, class B>
-inline Vec3T<Product<A, B>> operator+(const Vec3T<A>& a, const Vec3T<B>& b) {
+DHKIN_INLINE Vec3T<Product<A, B>> operator+(const Vec3T<A>& a, const Vec3T<B>& b) {
   return {a.x + b.x, a.y + b.y, a.z + b.z};
 }
 template <class A, class B>
-inline Vec3T<Product<A, B>> operator-(const Vec3T<A>& a, const Vec3T<B>& b) {
+DHKIN_INLINE Vec3T<Product<A, B>> operator-(const Vec3T<A>& a, const Vec3T<B>& b) {
   return {a.x - b.x, a.y - b.y, a.z - b.z};
 }
 template <class S, class A>
-inline Vec3T<Product<S, A>> operator*(S s, const Vec3T<A>& a) {
+DHKIN_INLINE Vec3T<Product<S, A>> operator*(S s, const Vec3T<A>& a) {
   return {s * a.x, s * a.y, s * a.z};
 }
 template <class A, class B>
-inline Product<A, B> dot(const Vec3T<A>& a, const Vec3T<B>& b) {
+DHKIN_INLINE Product<A, B> dot(const Vec3T<A>& a, const Vec3T<B>& b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 template <class A, class B>
-inline Vec3T<Product<A, B>> cross(const Vec3T<A>& a, const Vec3T<B>& b) {
+DHKIN_INLINE Vec3T<Product<A, B>> cross(const Vec3T<A>& a, const Vec3T<B>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 template <class V>
-inline V norm(const Vec3T<V>& a) {
+DHKIN_INLINE V norm(const Vec3T<V>& a) {
   return sqrt(dot(a, a));
 }
 
@@ -113,7 +113,7 @@ inline FrameT<V> broadcast(const Frame& f) {
 
 // a * b
 template <class A, class B>
-inline FrameT<Product<A, B>> operator*(const FrameT<A>& a, const FrameT<B>& b) {
+DHKIN_INLINE FrameT<Product<A, B>> operator*(const FrameT<A>& a, const FrameT<B>& b) {
   FrameT<Product<A, B>> out;
   for (int r = 0; r < 3; ++r) {
     const A a0 = a.R[r][0], a1 = a.R[r][1], a2 = a.R[r][2];
@@ -140,7 +140,7 @@ inline FrameT<V> inverse(const FrameT<V>& f) {
 
 // f = f * Rz(angle), given the angle's cosine and sine.
 template <class V>
-inline void turn_about_z(FrameT<V>& f, V c, V s) {
+DHKIN_INLINE void turn_about_z(FrameT<V>& f, V c, V s) {
   for (int r = 0; r < 3; ++r) {
     const V x = f.R[r][0], y = f.R[r][1];
     f.R[r][0] = c * x + s * y;
@@ -150,13 +150,13 @@ inline void turn_about_z(FrameT<V>& f, V c, V s) {
 
 // f = f * Tz(distance).
 template <class V>
-inline void slide_along_z(FrameT<V>& f, V distance) {
+DHKIN_INLINE void slide_along_z(FrameT<V>& f, V distance) {
   for (int r = 0; r < 3; ++r) f.p[r] += distance * f.R[r][2];
 }
 
 // f = f * Tr(point): the same frame moved to `point` (given in f's coordinates).
 template <class V>
-inline FrameT<V> moved_to(const FrameT<V>& f, const Vec3& point) {
+DHKIN_INLINE FrameT<V> moved_to(const FrameT<V>& f, const Vec3& point) {
   FrameT<V> out = f;
   const Vec3T<V> shift = f.rotate(point);
   out.p[0] += shift.x;
@@ -203,7 +203,7 @@ inline Frame rotation_vector(const Vec3& w) {
 
 // Rotation of v by the angle with cosine c and sine s about the unit vector k.
 template <class V, class W>
-inline Vec3T<Product<V, W>> rotate_about(const Vec3& k, V c, V s, const Vec3T<W>& v) {
+DHKIN_INLINE Vec3T<Product<V, W>> rotate_about(const Vec3& k, V c, V s, const Vec3T<W>& v) {
   using T = Product<V, W>;
   const T along = (1.0 - c) * dot(k, v);
   return {c * v.x + s * (k.y * v.z - k.z * v.y) + along * k.x,

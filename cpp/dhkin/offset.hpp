@@ -70,7 +70,7 @@ inline void set_lane(TurnsT<V>& t, int l, const Turns& x) {
 // The rigid motion turning about the line of joint axis `joint` by the angle t, applied to v: a
 // point, or a direction.
 template <class V, class W>
-inline Vec3T<Product<V, W>> screw_apply(const OffsetGeometry& g, int joint, const SinCosT<V>& t,
+DHKIN_INLINE Vec3T<Product<V, W>> screw_apply(const OffsetGeometry& g, int joint, const SinCosT<V>& t,
                                         const Vec3T<W>& v, bool point) {
   const Vec3& axis = g.directions[joint];
   if (!point) return rotate_about(axis, t.c, t.s, v);
@@ -80,7 +80,7 @@ inline Vec3T<Product<V, W>> screw_apply(const OffsetGeometry& g, int joint, cons
 
 // G v (a point or a direction).
 template <class V>
-inline Vec3T<V> motion_apply(const OffsetGeometry& g, const FrameT<V>& T_home,
+DHKIN_INLINE Vec3T<V> motion_apply(const OffsetGeometry& g, const FrameT<V>& T_home,
                              const TurnsT<V>& turns, const Vec3& v, bool point) {
   Vec3T<V> x = screw_apply(g, 4, turns.q5, v, point);
   x = screw_apply(g, 5, turns.q6, x, point);
@@ -90,20 +90,20 @@ inline Vec3T<V> motion_apply(const OffsetGeometry& g, const FrameT<V>& T_home,
 
 // Component of v normal to n.
 template <class V>
-inline Vec3T<V> in_plane(const OffsetGeometry& g, const Vec3T<V>& v) {
+DHKIN_INLINE Vec3T<V> in_plane(const OffsetGeometry& g, const Vec3T<V>& v) {
   return v - dot(v, g.n) * g.n;
 }
 
 // The arm's target: axis 4's point under G, from axis 2's point, normal to n.
 template <class V>
-inline Vec3T<V> arm_point(const OffsetGeometry& g, const FrameT<V>& T_home,
+DHKIN_INLINE Vec3T<V> arm_point(const OffsetGeometry& g, const FrameT<V>& T_home,
                           const TurnsT<V>& turns) {
   return in_plane(g, motion_apply(g, T_home, turns, g.points[3], true) - g.points[1]);
 }
 
 // Angle about n of v from plane_x.
 template <class V>
-inline V plane_angle(const OffsetGeometry& g, const Vec3T<V>& v) {
+DHKIN_INLINE V plane_angle(const OffsetGeometry& g, const Vec3T<V>& v) {
   return atan2(dot(v, g.plane_y), dot(v, g.plane_x));
 }
 
@@ -162,7 +162,7 @@ struct ElbowSetup {
 };
 
 template <class V>
-inline ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
+DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
                                  const TurnsT<V>& turns, const Vec3T<V>& arm, double reach_side,
                                  double clamp) {
   const V span = norm(arm);
@@ -192,7 +192,7 @@ inline ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_hom
 // Elbow branch e: the planar rotation taking the bent arm onto the target for q2, the angle of G
 // about n for q4.
 template <class V>
-inline ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& setup,
+DHKIN_INLINE ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& setup,
                           const Vec3T<V>& arm, V seed_q2, const FamilyRequestT<V>& request,
                           int e) {
   ElbowRoot<V> out;

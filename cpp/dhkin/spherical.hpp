@@ -67,7 +67,7 @@ struct ShoulderRoots {
 // Turning about axis 1 by phi maps the arm-plane point (X, b) to the wrist centre's coordinates
 // (x, y) across axis 1: X = +-sqrt(r^2 - b^2), phi = atan2(y, x) - atan2(b, X).
 template <class V>
-inline ShoulderRoots<V> shoulder(const SphericalGeometry& g, const FrameT<V>& T, V seed_q1,
+DHKIN_INLINE ShoulderRoots<V> shoulder(const SphericalGeometry& g, const FrameT<V>& T, V seed_q1,
                                  const FamilyRequestT<V>& request, CandidatesT<V>& out) {
   const Vec3T<V> d = T.apply(g.centre_in_flange) - g.origin;
   const V x = dot(d, g.forward), y = dot(d, g.lateral);
@@ -103,7 +103,7 @@ struct TargetColumns {
 };
 
 template <class V>
-inline TargetColumns<V> target_columns(const SphericalGeometry& g, const FrameT<V>& T, V turn1) {
+DHKIN_INLINE TargetColumns<V> target_columns(const SphericalGeometry& g, const FrameT<V>& T, V turn1) {
   const SinCosT<V> t = sincos(turn1);
   const Vec3T<V> k0 = T.rotate(g.target_to_wrist.column(0));
   const Vec3T<V> k2 = T.rotate(g.target_to_wrist.column(2));
@@ -127,7 +127,7 @@ struct WristRoots {
 // branches), theta = +- the computed angle, and t6 from the remainder Ry(-theta) Rz(-t4) H, so
 // that the pose error is what the choice costs.
 template <class V>
-inline WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns<V>& columns, V turn23,
+DHKIN_INLINE WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns<V>& columns, V turn23,
                            const JointsT<V>& seed, const FamilyRequestT<V>& request) {
   const SinCosT<V> t23 = sincos(turn23);
   const Vec3T<V> a = rotate_about(g.lateral, t23.c, -t23.s, columns.first);
@@ -166,7 +166,7 @@ inline WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns<V>& c
 }
 
 template <class V>
-inline void store(CandidatesT<V>& out, int b, V q1, V q2, V q3, const WristRoots<V>& wrist, int w,
+DHKIN_INLINE void store(CandidatesT<V>& out, int b, V q1, V q2, V q3, const WristRoots<V>& wrist, int w,
                   MaskOf<V> valid, BitsOf<V> flag, BitsOf<V> near) {
   out.q[b] = {q1, q2, q3, wrist.q[w][0], wrist.q[w][1], wrist.q[w][2]};
   out.valid[b] = valid;
@@ -176,7 +176,7 @@ inline void store(CandidatesT<V>& out, int b, V q1, V q2, V q3, const WristRoots
 
 // angle(target * conj(point)): the turn taking arm-plane `point` towards `target`.
 template <class V>
-inline V turn_to(const PlanarT<V>& target, const PlanarT<V>& point) {
+DHKIN_INLINE V turn_to(const PlanarT<V>& target, const PlanarT<V>& point) {
   return atan2(target.reach * point.height - target.height * point.reach,
                target.height * point.height + target.reach * point.reach);
 }

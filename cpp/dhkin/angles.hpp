@@ -129,6 +129,40 @@ DHKIN_INLINE SinCosT<V> sincos(V x) {
   return out;
 }
 
+// sincos(-x) from t = sincos(x): (-sin x, cos x), the same bits sincos(-x) gives (the reduction
+// and both polynomials are symmetric, and so is the C library's).
+template <class V>
+DHKIN_INLINE SinCosT<V> negated(const SinCosT<V>& t) {
+  return {-t.s, t.c};
+}
+
+// |sin x| <= band for a band in (0, 1e-3], the same answer as abs(sincos(x).s) <= band without
+// the cosine: with x = k pi/2 + r, |sin x| is |sin r| for even k, else |cos r| > 0.7; and where
+// |r| > 2 band, |sin r| > band (sin r >= r (1 - r^2 / 6)), so the polynomial is evaluated only
+// where some lane is closer.
+template <class V>
+DHKIN_INLINE MaskOf<V> small_sine(V x, double band) {
+  using namespace elementary;
+  const V shifted = x * kTwoOverPi + kRounder;
+  const V k = shifted - kRounder;
+  const V r = (x - k * kHalfPiHead) - k * kHalfPiTail;
+  auto result = (rounded_bits(shifted) & 1) == 0 && abs(r) <= 2.0 * band;
+  if (any(result)) result = result && abs(sincos(x).s) <= band;
+  for_each_lane(outside(x, kReductionLimit),
+                [&](int l) { set_lane(result, l, std::fabs(std::sin(lane(x, l))) <= band); });
+  return result;
+}
+
+// atan2(y, x) <= limit for y, x >= 0 and a limit in (0, 1e-3]: the same answer, with atan2
+// evaluated only where some lane has y <= 2 limit x (elsewhere the angle is at least
+// atan(2 limit) > limit; NaN goes to atan2 as well).
+template <class V>
+DHKIN_INLINE MaskOf<V> small_angle(V y, V x, double limit) {
+  auto maybe = !(y > (2.0 * limit) * x);
+  if (any(maybe)) maybe = maybe && atan2(y, x) <= limit;
+  return maybe;
+}
+
 // atan2(y, x) within ~2 ulp, with the C library's values at zeros, signed zeros, infinities and
 // NaN (those inputs go to it). Reduction to t = min/max of |x|, |y| in [0, 1], then
 // atan(t) = atan(k/8) + atan((t - k/8) / (1 + t k/8)).

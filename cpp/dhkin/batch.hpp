@@ -11,6 +11,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "dhkin/block.hpp"
 #include "dhkin/expand.hpp"
@@ -60,36 +61,46 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
                         BatchReport& report) {
   const double slack = tolerance / plan.lever;
   tolerance = plan.verification_tolerance(tolerance);
+  // by branch, then lane: the copies, whether each exists and must be verified again, the
+  // branch's errors and flags
   alignas(64) double q[kBranches][kDof][kLanes];
-  std::array<Mask, kBranches> exists{}, recheck{};
+  alignas(64) double position[kBranches][kLanes], rotation[kBranches][kLanes];
+  alignas(64) std::int64_t exists[kBranches][kLanes], recheck[kBranches][kLanes];
+  alignas(64) std::int64_t flags[kBranches][kLanes];
   for (int b = 0; b < kBranches; ++b) {
-    exists[b] = answer.ok[b];
-    if (!any(exists[b])) continue;
+    Mask found = answer.ok[b];
+    std::memcpy(exists[b], &found.v, sizeof exists[b]);
+    if (!any(found)) continue;
     Mask clipped = every_lane<Lanes>(false);
     for (int j = 0; j < kDof; ++j) {
       const bool revolute = plan.revolute(j);
       const Lanes value = answer.q[b][j];
       const NearestTurn<Lanes> nearest =
           nearest_turn(plan.limits[j], revolute, value, slack, answer.seed[j]);
-      exists[b] = exists[b] && nearest.exists;
+      found = found && nearest.exists;
       const Lanes copy = placed(plan.limits[j], revolute, value, nearest.turn);
       clipped = clipped || copy != shifted(revolute, value, nearest.turn);
       copy.store(q[b][j]);
     }
-    recheck[b] = clipped || answer.errors[b].largest() > tolerance - kCopyMargin;
+    const Mask again = clipped || answer.errors[b].largest() > tolerance - kCopyMargin;
+    std::memcpy(exists[b], &found.v, sizeof exists[b]);
+    std::memcpy(recheck[b], &again.v, sizeof recheck[b]);
+    std::memcpy(flags[b], &answer.flags[b].v, sizeof flags[b]);
+    answer.errors[b].position.store(position[b]);
+    answer.errors[b].rotation.store(rotation[b]);
   }
   for (int l = 0; l < count; ++l) {
     if (!answer.answered[l]) continue;
     const std::size_t i = first + static_cast<std::size_t>(l);
     int slot = 0;
     for (int b = 0; b < kBranches; ++b) {
-      if (!lane(exists[b], l)) continue;
+      if (exists[b][l] == 0) continue;
       Solution solution;
       for (int j = 0; j < kDof; ++j) solution.q[j] = q[b][j][l];
       solution.branch = b;
-      solution.flags = static_cast<std::uint8_t>(lane(answer.flags[b], l));
-      solution.error = lane(answer.errors[b], l);
-      if (lane(recheck[b], l)) {
+      solution.flags = static_cast<std::uint8_t>(flags[b][l]);
+      solution.error = {position[b][l], rotation[b][l]};
+      if (recheck[b][l] != 0) {
         solution.error = check(plan.chain, solution.q.data(), lane(answer.T_at, l));
         if (!solution.error.within(tolerance)) continue;
       }

@@ -87,25 +87,24 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
 inline void direct_block(const Plan& plan, const TargetFrames& frames, const PoseBlock& poses,
                          double tolerance, BlockAnswer& out) {
   tolerance = plan.verification_tolerance(tolerance);
-  block::FrameColumns dh, at;
+  block::FrameColumns projected;
   alignas(64) double seeds[kDof][kLanes];
   Mask declined = every_lane<Lanes>(false);
   for (int l = 0; l < kLanes; ++l) {
     const int i = l < poses.count ? l : poses.count - 1;
     Joints seed;
     for (int j = 0; j < kDof; ++j) seed[j] = seeds[j][l] = poses.seed[i][j];
-    PoseTargets targets;
+    Frame pose;  // the identity where the pose is rejected
     out.projection[l] = 0.0;
-    if (!pose_targets(frames, poses.T[i], seed, out.status[l], out.projection[l], targets)) {
+    if (!projected_pose(poses.T[i], seed, out.status[l], out.projection[l], pose)) {
       set_lane(declined, l, true);  // rejected: the caller reports it
       for (int j = 0; j < kDof; ++j) seeds[j][l] = 0.0;
     }
-    dh.put(l, targets.T_dh);
-    at.put(l, targets.T_at);
+    projected.put(l, pose);
   }
   for (int j = 0; j < kDof; ++j) out.seed[j] = Lanes::load(seeds[j]);
-  const FrameT<Lanes> T_dh = dh.frames();
-  out.T_at = at.frames();
+  FrameT<Lanes> T_dh;
+  targets_of(frames, projected.frames(), T_dh, out.T_at);
   CandidatesT<Lanes> found;
   plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
   out.why = found.why;

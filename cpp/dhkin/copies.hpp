@@ -61,10 +61,14 @@ struct NearestTurn {
 template <class V>
 DHKIN_INLINE NearestTurn<V> nearest_turn(const JointLimit& limit, bool revolute, V value, double slack,
                                    V aim) {
+  if (!revolute) return {turn_range<V>(limit, revolute, value, slack).count > 0.0, V(0.0)};
+  const V wanted = nearbyint((aim - value) * kInverseTwoPi);
+  // a whole number lies in [ceil(low), floor(high)] exactly when low <= it <= high
+  const auto inside = (limit.lower - slack - value) * kInverseTwoPi <= wanted &&
+                      wanted <= (limit.upper + slack - value) * kInverseTwoPi;
+  if (all(inside)) return {inside, wanted + 0.0};
   const TurnRangeT<V> range = turn_range<V>(limit, revolute, value, slack);
   const auto exists = range.count > 0.0;
-  if (!revolute) return {exists, V(0.0)};
-  const V wanted = nearbyint((aim - value) * kInverseTwoPi);
   const V turn = min(max(wanted, range.first), range.first + range.count - 1.0);
   return {exists, select(exists, turn + 0.0, V(0.0))};
 }

@@ -25,10 +25,10 @@ struct PoseTargets {
   Frame T_at;  // T_dh followed by the TCP point: the target of the plan's chains
 };
 
-// Step 1 without the bookkeeping: the pose's status (a PoseStatus; the seed's too), the
-// projection's size and the targets. False when the pose is not usable.
-inline bool pose_targets(const TargetFrames& frames, const double* T, const Joints& seed,
-                         int& status, double& projection, PoseTargets& targets) {
+// The pose's status (a PoseStatus; the seed's too), and its rotation projected onto the nearest
+// rotation (`projection`: how far). False when the pose is not usable.
+inline bool projected_pose(const double* T, const Joints& seed, int& status, double& projection,
+                           Frame& projected) {
   status = pose_status(T);
   if (status != kUsable) return false;
   for (double v : seed) {
@@ -37,9 +37,25 @@ inline bool pose_targets(const TargetFrames& frames, const double* T, const Join
       return false;
     }
   }
-  const Frame projected = projected_frame(T, projection);
-  targets.T_dh = frames.to_dh(projected);
-  targets.T_at = moved_to(targets.T_dh, frames.tcp_point);
+  projected = projected_frame(T, projection);
+  return true;
+}
+
+// The targets of a projected pose (per lane for V = Lanes): TargetFrames::to_dh, then the TCP.
+template <class V>
+inline void targets_of(const TargetFrames& frames, const FrameT<V>& projected, FrameT<V>& T_dh,
+                       FrameT<V>& T_at) {
+  T_dh = frames.base_inverse * projected * frames.tool_inverse;
+  T_at = moved_to(T_dh, frames.tcp_point);
+}
+
+// Step 1 without the bookkeeping: the pose's status, the projection's size and the targets.
+// False when the pose is not usable.
+inline bool pose_targets(const TargetFrames& frames, const double* T, const Joints& seed,
+                         int& status, double& projection, PoseTargets& targets) {
+  Frame projected;
+  if (!projected_pose(T, seed, status, projection, projected)) return false;
+  targets_of(frames, projected, targets.T_dh, targets.T_at);
   return true;
 }
 

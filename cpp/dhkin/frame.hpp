@@ -47,6 +47,16 @@ DHKIN_INLINE V norm(const Vec3T<V>& a) {
   return sqrt(dot(a, a));
 }
 
+// norm(a) <= limit for limit >= 0: the same answer, with the square root taken only where some
+// lane has |a|^2 <= 4 limit^2 (elsewhere |a| > 2 limit, rounding included).
+template <class V>
+DHKIN_INLINE MaskOf<V> norm_at_most(const Vec3T<V>& a, double limit) {
+  const V squared = dot(a, a);
+  auto maybe = !(squared > 4.0 * limit * limit);
+  if (any(maybe)) maybe = maybe && sqrt(squared) <= limit;
+  return maybe;
+}
+
 // Lane l of a vector of lanes.
 inline Vec3 lane(const Vec3T<Lanes>& a, int l) { return {lane(a.x, l), lane(a.y, l), lane(a.z, l)}; }
 inline Vec3 lane(const Vec3& a, int) { return a; }

@@ -163,9 +163,8 @@ struct ElbowSetup {
 
 template <class V>
 DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
-                                 const TurnsT<V>& turns, const Vec3T<V>& arm, double reach_side,
-                                 double clamp) {
-  const V span = norm(arm);
+                                       const TurnsT<V>& turns, V span, double reach_side,
+                                       double clamp) {
   const double L2 = g.upper_length, L3 = g.forearm_length;
   const double low = std::abs(L2 - L3), high = L2 + L3;
   const V outer = high - span, inner = span - low;
@@ -176,7 +175,7 @@ DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>&
   V root = sqrt(max(outer, V(g.spread)) * (high + span) * max(inner, V(g.spread)) *
                 (span + low)) / 2.0;
   const V kappa = (span * span - L2 * L2 - L3 * L3) / 2.0;
-  out.merged = atan2(root, abs(kappa)) <= kMergeAngle;
+  out.merged = small_angle(root, abs(kappa), kMergeAngle);
   root = select(out.merged, V(0.0), root);
   out.flag = bits_if(out.merged || root <= kFlagBand * L2 * L3, kElbow);
   const V half = atan2(root, kappa);
@@ -187,6 +186,14 @@ DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>&
   out.q3[0] = select(swap, second, first), out.q3[1] = select(swap, first, second);
   out.total = plane_angle(g, motion_apply(g, T_home, turns, g.plane_x, false));
   return out;
+}
+
+// The same, for the arm's target point (span = |arm|).
+template <class V>
+DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
+                                       const TurnsT<V>& turns, const Vec3T<V>& arm,
+                                       double reach_side, double clamp) {
+  return elbow_setup(g, T_home, turns, norm(arm), reach_side, clamp);
 }
 
 // Elbow branch e: the planar rotation taking the bent arm onto the target for q2, the angle of G
@@ -200,7 +207,7 @@ DHKIN_INLINE ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& se
   out.q3 = setup.q3[e];
   const SinCosT<V> t3 = sincos(out.q3);
   const Vec3T<V> bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
-  out.near = bits_if(norm(bent) <= request.seed_length, kElbow);
+  out.near = bits_if(norm_at_most(bent, request.seed_length), kElbow);
   const auto seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
   out.near = out.near | bits_if(setup.clamped, kClamped);
   out.q2 = select(seeded, seed_q2, atan2(dot(g.n, cross(bent, arm)), dot(bent, arm)));
@@ -313,7 +320,7 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
   const V gap = distance - std::abs(c);
   const auto shoulder_ok = gap >= -request.clamp;
   V root = sqrt(max(gap, V(g.spread)) * (distance + std::abs(c)));
-  const auto shoulder_merged = c != 0.0 && atan2(root, V(std::abs(c))) <= kMergeAngle;
+  const auto shoulder_merged = c != 0.0 && small_angle(root, V(std::abs(c)), kMergeAngle);
   root = select(shoulder_merged, V(0.0), root);
   const BitsOf<V> shoulder_flag =
       bits_if(shoulder_merged || root <= kFlagBand * g.scale, kShoulder);
@@ -351,7 +358,7 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
     const auto wrist_seeded = wrist_close && (request.use_seed & kWrist) != 0;
     const V q5_half = atan2(sine, cosine);
     const Vec3T<V> a = u - cosine * w6;
-    const SinCosT<V> minus_q1 = sincos(-q1);
+    const SinCosT<V> minus_q1 = negated(t1);  // sincos(-q1)
     for (int w = 0; w < 2; ++w) {
       const V q5 = g.psi + (w == 0 ? g.up_sign * q5_half : -g.up_sign * q5_half);
       const SinCosT<V> minus_q5 = sincos(-q5);
@@ -372,10 +379,11 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
           set_lane(arm, l, arm_point(g, lane(T_home, l), turns_l));
         }
       });
-      out.why[2 + 2 * s + w] = norm(arm);
+      const V span = norm(arm);
+      out.why[2 + 2 * s + w] = span;
       // the two wrist roots coincide exactly: one solution
       const auto wrist_valid = w == 0 || wrist_seeded || sine != 0.0;
-      const ElbowSetup<V> setup = elbow_setup(g, T_home, turns, arm, reach_side, request.clamp);
+      const ElbowSetup<V> setup = elbow_setup(g, T_home, turns, span, reach_side, request.clamp);
       for (int e = 0; e < 2; ++e) {
         const ElbowRoot<V> r = elbow(g, setup, arm, seed[1], request, e);
         const int b = 4 * s + 2 * e + w;

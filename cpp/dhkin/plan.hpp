@@ -114,15 +114,13 @@ struct Plan {
   template <class V>
   BitsOf<V> value_flags(const JointsT<V>& q) const {
     if (family == Family::offset_wrist) {
-      return bits_if(abs(sincos(q[4] - offset.psi).s) <= kFlagBand, kWrist) |
-             bits_if(abs(sincos(q[2] - offset.elbow_base).s) <= kFlagBand, kElbow);
+      return bits_if(small_sine(q[4] - offset.psi, kFlagBand), kWrist) |
+             bits_if(small_sine(q[2] - offset.elbow_base, kFlagBand), kElbow);
     }
     const SphericalGeometry& g = spherical;
-    const BitsOf<V> wrist =
-        bits_if(abs(sincos(g.wrist_directions[1] * q[4] + g.tilt).s) <= kFlagBand, kWrist);
+    const BitsOf<V> wrist = bits_if(small_sine(g.wrist_directions[1] * q[4] + g.tilt, kFlagBand), kWrist);
     if (family == Family::spherical_wrist) {
-      return wrist |
-             bits_if(abs(sincos(g.signs[2] * q[2] + g.bend_at_zero).s) <= kFlagBand, kElbow);
+      return wrist | bits_if(small_sine(g.signs[2] * q[2] + g.bend_at_zero, kFlagBand), kElbow);
     }
     return wrist | bits_if(abs(g.signs[2] * q[2] + g.slide_along) <= kFlagBand * g.scale, kElbow);
   }

@@ -79,7 +79,7 @@ DHKIN_INLINE ShoulderRoots<V> shoulder(const SphericalGeometry& g, const FrameT<
   const V gap = radius - std::abs(b);
   const auto reachable = gap >= -request.clamp;
   V root = sqrt(max(gap, V(g.spread)) * (radius + std::abs(b)));
-  const auto merged = b != 0.0 && atan2(root, V(std::abs(b))) <= kMergeAngle;
+  const auto merged = b != 0.0 && small_angle(root, V(std::abs(b)), kMergeAngle);
   root = select(merged, V(0.0), root);
   roots.near = bits_if(b == 0.0 && radius <= request.seed_length, kShoulder);
   const auto seeded = roots.near != 0 && (request.use_seed & kShoulder) != 0;
@@ -152,10 +152,11 @@ DHKIN_INLINE WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns
                    d4 * seed[3] + 0.5 * wrap(alpha + turn * gamma - d4 * seed[3] - turn * d6 * seed[5]),
                    alpha);
   }
+  const SinCosT<V> s_theta = sincos(theta);
   for (int w = 0; w < 2; ++w) {
     const V t4 = alpha + (w == 1 ? select(seeded, V(0.0), V(kPi)) : V(0.0));
     const V t5 = w == 0 ? theta : -theta;
-    const SinCosT<V> s4 = sincos(t4), s5 = sincos(t5);
+    const SinCosT<V> s4 = sincos(t4), s5 = w == 0 ? s_theta : negated(s_theta);
     // Ry(-t5) Rz(-t4) H = Rz(t6): t6 from its first column
     const V t6 = atan2(-s4.s * h00 + s4.c * h10, s5.c * (s4.c * h00 + s4.s * h10) - s5.s * h20);
     roots.q[w][0] = d4 * t4;
@@ -207,7 +208,7 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
     V sine_scaled = sqrt(max(outer, V(g.spread)) * (upper + fore + distance) *
                          max(inner, V(g.spread)) * (distance + std::abs(upper - fore)));
     const V cosine_scaled = distance * distance - upper * upper - fore * fore;
-    const auto merged = atan2(sine_scaled, abs(cosine_scaled)) <= kMergeAngle;
+    const auto merged = small_angle(sine_scaled, abs(cosine_scaled), kMergeAngle);
     sine_scaled = select(merged, V(0.0), sine_scaled);
     const BitsOf<V> elbow_flag =
         bits_if(merged || sine_scaled <= kFlagBand * 2 * upper * fore, kElbow);
@@ -252,15 +253,15 @@ inline void solve_stanford(const SphericalGeometry& g, const FrameT<V>& T,
     const auto reachable = gap >= -request.clamp;
     const BitsOf<V> clamped = bits_if(gap < 0.0, kClamped);
     V root = sqrt(max(gap, V(g.spread)) * (distance + g.slide_offset));
-    const auto merged = atan2(root, V(g.slide_offset)) <= kMergeAngle;
+    const auto merged = small_angle(root, V(g.slide_offset), kMergeAngle);
     root = select(merged, V(0.0), root);
     const BitsOf<V> slide_flag = bits_if(merged || root <= kFlagBand * g.scale, kElbow);
     for (int e = 0; e < 2; ++e) {
       const V t = -g.slide_along + (e == 0 ? root : -root);
       const PlanarT<V> centre{g.wrist_at_zero.height + t * g.slide.height,
                               g.wrist_at_zero.reach + t * g.slide.reach};
-      const auto free = sqrt(centre.height * centre.height + centre.reach * centre.reach) <=
-                        request.seed_length;
+      const auto free = norm_at_most(Vec3T<V>{centre.height, centre.reach, V(0.0)},
+                                     request.seed_length);
       const BitsOf<V> slide_near = bits_if(free, kElbow);
       const V turn2 = select(free && (request.use_seed & kElbow) != 0, g.signs[1] * seed[1],
                              turn_to(target, centre));

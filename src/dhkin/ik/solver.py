@@ -139,8 +139,12 @@ class ClosedFormSolver:
                 answer = self.core.solve(T, q_seed, tolerance, None, copies)
             except TypeError:
                 answer = None
-            if answer is not None and answer.status == 0:
-                return self._solutions(answer, tolerance)
+            if answer is not None:
+                found = answer.found  # solutions; -1: the pose or the seed was rejected
+                if found > 0:
+                    return IKSolutions.from_core(answer, self.family, self._configuration)
+                if found == 0:
+                    return self._solutions(answer, tolerance)
         return self._solve_checked(T, q_seed, tolerance, tcp, copies)
 
     def _solve_checked(self, T: ArrayLike, q_seed: ArrayLike | None, tolerance: float,

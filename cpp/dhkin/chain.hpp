@@ -59,81 +59,56 @@ DHKIN_INLINE void apply_motion(FrameT<V>& f, const ChainJoint& joint, V q) {
   }
 }
 
-// How the rotation of a constant frame P mixes columns: where every column of P.R is one +-1 and
-// zeros (a DH table's rotations about a right angle), column c of state * P is +- column
-// source[c] of state; and the nonzero entries of P.p.
+// Where a constant frame P has zeros. A DH table's frames turn about x (P.R = Rx(alpha): row 0
+// and column 0 are those of the identity), often by a right angle (whose cosine 6e-17 stays a
+// factor), and move along one or two axes.
 struct ConstantShape {
-  // The rotations of DH tables, with straight-line code of their own: the identity, and the
-  // turns by +90, -90 and 180 degrees about x (columns 1 and 2 swapped and signed).
-  enum Kind { kGeneral, kIdentity, kTurnX90, kTurnXMinus90, kTurnX180 };
+  enum Kind { kGeneral, kIdentity, kTurnX };
   Kind kind = kGeneral;
-  bool permutation = true;
-  int source[3] = {0, 1, 2};
-  bool negate[3] = {false, false, false};
-  int moving[3] = {0, 0, 0};  // indices of the nonzero entries of P.p, in order
-  int moves = 0;
+  double turn[2][2] = {{1.0, 0.0}, {0.0, 1.0}};  // P.R[1..2][1..2] of a turn about x
+  int moves = 0;                                 // nonzero entries of P.p
+  int axis[3] = {0, 0, 0};                       // their indices, in order
+  double move[3] = {0.0, 0.0, 0.0};              // and values
 
   ConstantShape() = default;
   explicit ConstantShape(const Frame& P) {
-    for (int c = 0; c < 3; ++c) {
-      int nonzero = 0;
-      for (int k = 0; k < 3; ++k) {
-        if (P.R[k][c] == 0.0) continue;
-        ++nonzero;
-        source[c] = k;
-        negate[c] = P.R[k][c] < 0.0;
-        permutation = permutation && (P.R[k][c] == 1.0 || P.R[k][c] == -1.0);
-      }
-      permutation = permutation && nonzero == 1;
-    }
     for (int k = 0; k < 3; ++k) {
-      if (P.p[k] != 0.0) moving[moves++] = k;
+      if (P.p[k] != 0.0) axis[moves] = k, move[moves++] = P.p[k];
     }
-    if (!permutation || source[0] != 0 || negate[0]) return;
-    if (source[1] == 1 && source[2] == 2) {
-      kind = !negate[1] && !negate[2] ? kIdentity : negate[1] && negate[2] ? kTurnX180 : kGeneral;
-    } else if (source[1] == 2 && source[2] == 1) {  // column 1 = +-column 2, column 2 = -+column 1
-      kind = !negate[1] && negate[2] ? kTurnX90 : negate[1] && !negate[2] ? kTurnXMinus90 : kGeneral;
+    const bool about_x = P.R[0][0] == 1.0 && P.R[0][1] == 0.0 && P.R[0][2] == 0.0 &&
+                         P.R[1][0] == 0.0 && P.R[2][0] == 0.0;
+    if (!about_x) return;
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 2; ++c) turn[r][c] = P.R[r + 1][c + 1];
     }
+    const bool identity = P.R[1][1] == 1.0 && P.R[1][2] == 0.0 && P.R[2][1] == 0.0 &&
+                          P.R[2][2] == 1.0;
+    kind = identity ? kIdentity : kTurnX;
   }
 };
 
-// state = state * P for a constant frame P of this shape: operator* of frame.hpp without the
-// terms whose factor of P is zero, and +-1 factors applied as signs. The same sums in the same
-// order, so the same values short of the sign of a zero.
+// state = state * P for the constant frame P of this shape: operator* of frame.hpp without the
+// terms whose factor of P is zero. The same sums in the same order, so the same values short of
+// the sign of a zero.
 template <class V>
 DHKIN_INLINE void times_constant(FrameT<V>& state, const Frame& P, const ConstantShape& shape) {
-  if (!shape.permutation) {
+  if (shape.kind == ConstantShape::kGeneral) {
     state = state * P;
     return;
   }
   for (int r = 0; r < 3; ++r) {
     V* row = state.R[r];
-    if (shape.moves > 0) {  // the translation first: it reads the row before it turns
-      V sum = row[shape.moving[0]] * P.p[shape.moving[0]];
-      for (int t = 1; t < shape.moves; ++t) sum = sum + row[shape.moving[t]] * P.p[shape.moving[t]];
+    if (shape.moves == 1) {
+      state.p[r] = row[shape.axis[0]] * shape.move[0] + state.p[r];
+    } else if (shape.moves > 1) {
+      V sum = row[shape.axis[0]] * shape.move[0];
+      for (int t = 1; t < shape.moves; ++t) sum = sum + row[shape.axis[t]] * shape.move[t];
       state.p[r] = sum + state.p[r];
     }
-    switch (shape.kind) {
-      case ConstantShape::kIdentity:
-        break;
-      case ConstantShape::kTurnX90: {
-        const V column1 = row[1];
-        row[1] = row[2], row[2] = -column1;
-        break;
-      }
-      case ConstantShape::kTurnXMinus90: {
-        const V column1 = row[1];
-        row[1] = -row[2], row[2] = column1;
-        break;
-      }
-      case ConstantShape::kTurnX180:
-        row[1] = -row[1], row[2] = -row[2];
-        break;
-      default: {
-        const V a[3] = {row[0], row[1], row[2]};
-        for (int c = 0; c < 3; ++c) row[c] = shape.negate[c] ? -a[shape.source[c]] : a[shape.source[c]];
-      }
+    if (shape.kind == ConstantShape::kTurnX) {
+      const V a1 = row[1], a2 = row[2];
+      row[1] = a1 * shape.turn[0][0] + a2 * shape.turn[1][0];
+      row[2] = a1 * shape.turn[0][1] + a2 * shape.turn[1][1];
     }
   }
 }

@@ -8,7 +8,7 @@ run scripts/regenerate.py for the xacro/URDF files.
 Usage: python scripts/fit_tables.py          (writes the tables, prints the figures)
        python scripts/fit_tables.py --check  (exit 1 if a committed table differs from a fresh
                                              fit by more than 1e-14 in FK or any correction)
-       --reference-dir DIR                   (vendor URDFs; default ../shared/reference)
+       --reference-dir DIR                   (vendor URDFs; default robots/vendor)
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from dhkin.transforms import pose_error
 from dhkin.vendors import VENDOR_REFERENCES
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_REFERENCE_DIR = REPO.parent / "shared" / "reference"
+DEFAULT_REFERENCE_DIR = REPO / "robots" / "vendor"
 CHECK_TOLERANCE = 1e-14
 
 
@@ -45,7 +45,7 @@ class Fitted:
 
 
 UR5E_CALIBRATED_SOURCE = (
-    "One real UR5e with its factory calibration: ../shared/reference/ur5e_calibrated.urdf, the "
+    "One real UR5e with its factory calibration: robots/vendor/ur5e_calibrated.urdf, the "
     "ur_calibration output (hash calib_17107847223675855653) published in "
     "github.com/inaki1111/ur5_gra_ros2-main @ d0303ef39023903bb3cd3043a3e579f737ca99dc "
     "(my_robot_calibration.yaml), expanded with UniversalRobots/Universal_Robots_ROS2_Description "
@@ -75,7 +75,7 @@ def fit(entry: Fitted, reference_dir: Path) -> tuple[DHTable, DHTable, Path]:
     nominal = nominal_table(entry)
     fitted = fit_corrections(nominal, urdf, vendor.base, vendor.tip)
     provenance = (f" Base, per-joint corrections and tool fitted with dhkin.fit_corrections "
-                  f"(scripts/fit_tables.py) to ../shared/reference/{vendor.file} "
+                  f"(scripts/fit_tables.py) to robots/vendor/{vendor.file} "
                   f"({vendor.base} -> {vendor.tip}), whose FK this table reproduces exactly; "
                   f"nominal table: {entry.nominal}.")
     return nominal, replace(fitted, source=nominal.source + provenance), urdf

@@ -1,4 +1,4 @@
-"""Import the vendor URDFs of ../shared/reference that have no hand-written table as built-in
+"""Import the vendor URDFs of robots/vendor that have no hand-written table as built-in
 robots (robots/<name>.yaml), with ``dhkin.import_description``.
 
 Each table cites its vendor file and that file's upstream source (the file's first comment).
@@ -8,7 +8,7 @@ against its vendor URDF (dhkin.vendors.VENDOR_REFERENCES).
 Usage: python scripts/import_vendor_tables.py          (writes the tables, prints the summaries)
        python scripts/import_vendor_tables.py --check  (exit 1 if a committed table differs from
                                                        a fresh import)
-       --reference-dir DIR                            (default ../shared/reference)
+       --reference-dir DIR                            (default robots/vendor)
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from dhkin.table_file import table_to_yaml
 from dhkin.vendors import IMPORTED, VENDOR_REFERENCES
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_REFERENCE_DIR = REPO.parent / "shared" / "reference"
+DEFAULT_REFERENCE_DIR = REPO / "robots" / "vendor"
 _UPSTREAM = re.compile(r"<!--\s*source:\s*(.*?)\s*-->", re.DOTALL)
 
 
@@ -36,7 +36,7 @@ def imported(name: str, reference_dir: Path) -> tuple[ImportResult, str]:
     path = reference_dir / vendor.file
     result = import_description(path, base=vendor.base, tip=vendor.tip, name=name)
     upstream = _UPSTREAM.search(path.read_text(encoding="utf-8"))
-    cited = f"../shared/reference/{vendor.file}"
+    cited = f"robots/vendor/{vendor.file}"
     source = result.table.source.replace(str(path), cited)
     if upstream is not None:
         source += f" Upstream (the file's first comment): {' '.join(upstream.group(1).split())}"

@@ -10,11 +10,12 @@ import pytest
 import dhkin
 
 REPO = Path(__file__).resolve().parents[1]
-#: The vendor reference URDFs shipped with the project (copied from ../shared/reference with their
-#: provenance: robots/vendor/README.md).
+#: The vendor reference URDFs shipped with the project (provenance and licences:
+#: robots/vendor/README.md).
 REFERENCE_URDFS = REPO / "robots" / "vendor"
-SHARED = REPO.parent / "shared"  # the seeds only (issue 28 moves what the tests need inside)
 DATA = Path(__file__).resolve().parent / "data"
+#: The seed documents the tests read (provenance: tests/data/seeds/README.md).
+SEED_DOCUMENTS = DATA / "seeds"
 
 
 def oracle_errors(robot: dhkin.Robot, q: np.ndarray,

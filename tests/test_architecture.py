@@ -21,14 +21,17 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                     "dhkin.table_yaml", "dhkin.table_values",
                     "dhkin.reference", "dhkin.urdf", "dhkin.validators", "dhkin.vendors",
                     "dhkin.fit", "dhkin.builtin", "dhkin.tolerances", "dhkin.description",
-                    "dhkin.xml_text", "dhkin.axes_to_dh", "dhkin.files")),
+                    "dhkin.xml_text", "dhkin.axes_to_dh", "dhkin.files", "dhkin.xml_file",
+                    "dhkin.ros_packages", "dhkin.urdf_outline", "dhkin.xacro_expansion",
+                    "dhkin.memory")),
     ("kinematics", ("dhkin.ik", "dhkin.ik.*", "dhkin.arm", "dhkin.opw",
-                    "dhkin.opw_yaml")),
+                    "dhkin.opw_yaml", "dhkin.opw_compare")),
     ("analysis", ("dhkin.singularity", "dhkin.singularity.*", "dhkin.maps", "dhkin.maps.*",
                   "dhkin.validation", "dhkin.validation.*", "dhkin.compare",
-                  "dhkin.importer")),
+                  "dhkin.importer", "dhkin.import_names")),
     ("facade", ("dhkin.robot",)),
-    ("application", ("dhkin", "dhkin.checks", "dhkin.cli", "dhkin.cli_input")),
+    ("application", ("dhkin", "dhkin.checks", "dhkin.check_report", "dhkin.cli",
+                     "dhkin.cli_check", "dhkin.cli_describe", "dhkin.cli_input")),
 )
 
 

@@ -14,6 +14,7 @@ import yaml
 import dhkin
 from dhkin.cli import main
 from dhkin.validators import run_check_urdf
+from dhkin.vendors import vendor_dir
 
 from .conftest import REFERENCE_URDFS, REPO
 
@@ -123,6 +124,25 @@ def test_compare_pose_failure_exits_1_with_or_without_strict(capsys) -> None:
                            "50", *extra)
         assert code == 1 and out.startswith("FAIL:"), out
         assert "joint 1 (shoulder_pan_joint) velocity:" in out
+
+
+def test_compare_and_validate_find_the_shipped_vendor_urdf_from_anywhere(
+        capsys, tmp_path, monkeypatch) -> None:
+    """Without a URDF, `dhkin compare` uses the robot's vendor URDF shipped with dhkin and its
+    frames (AUBO's tip is wrist3_Link), and `validate --reference vendor` the same file; a robot
+    without one is a one-line error naming the argument."""
+    monkeypatch.chdir(tmp_path)
+    code, out, _ = run(capsys, "compare", "aubo_i10", "-n", "50")
+    assert code == 0 and out.startswith("OK:"), out
+    code, out, _ = run(capsys, "validate", "aubo_i10", "--reference", "vendor", "-n", "10")
+    shipped = vendor_dir().resolve() / "aubo_i10.urdf"  # the installed package's copy
+    assert code == 0, out
+    assert f"reference: vendor {shipped} (base_link -> wrist3_Link)" in out
+    for argv, named in ((["compare", "planar_2r"], "urdf: planar_2r has no vendor URDF"),
+                        (["validate", "planar_2r", "--reference", "vendor"],
+                         "reference (--reference): planar_2r has no vendor URDF")):
+        code, _, err = run(capsys, *argv)
+        assert code == 2 and named in err and err.count("\n") == 1, err
 
 
 def test_compare_missing_frame_is_a_clear_error(capsys) -> None:
@@ -328,18 +348,54 @@ def test_cli_validate_bad_arguments(capsys, monkeypatch, args: list[str], named:
     assert named in err and "Traceback" not in err
 
 
-def test_check_runs_the_vendor_validation(capsys) -> None:
-    """`dhkin check` has an "ik vs vendor" column: the IK validated with targets made and
-    solutions checked on the vendor URDF, with every failure kind counted."""
+def test_check_runs_the_vendor_validation(capsys, tmp_path, monkeypatch) -> None:
+    """`dhkin check` validates the IK with targets made and solutions checked on the vendor URDF
+    too ("ik vs vendor", every failure kind counted), found by default from any directory."""
+    monkeypatch.chdir(tmp_path)
     code, out, _ = run(capsys, "check", "abb_irb1200_7_70", "--ik-poses", "40",
-                       "--vendor-poses", "40")
+                       "--vendor-poses", "40", "--details")
     assert code == 0, out
-    header, _, row = out.splitlines()[:3]
-    assert "ik vs pin" in header and "ik vs vendor" in header
-    assert "abb_irb1200_7_70.urdf: 48 poses" in row
+    lines = out.splitlines()
+    assert lines[2].startswith("abb_irb1200_7_70 ") and " PASS " in lines[2]
+    vendor = next(line for line in lines if line.startswith("  ik vs vendor"))
+    assert "ok" in vendor and "abb_irb1200_7_70.urdf: 48 poses" in vendor
+    details = out.split("abb_irb1200_7_70 (spherical_wrist): PASS", 1)[1]
     for count in ("wrong 0", "missing 0", "missing-branch 0", "discontinuous 0"):
-        assert row.count(count) == 2, row
-    assert row.rstrip().endswith("PASS")
+        assert details.count(count) == 2, details
+    assert max(len(line) for line in lines) <= 100
+
+
+def test_check_prints_one_line_per_robot_and_writes_every_figure(capsys, tmp_path) -> None:
+    """One line per robot (robot, family, verdict, worst residual, completeness, time) within
+    100 columns and a summary; --json holds the verdicts, texts, times and figures of every
+    check (the validation's counts and residuals among them)."""
+    path = tmp_path / "check.json"
+    code, out, _ = run(capsys, "check", "planar_3r", "ur5", "--ik-poses", "30",
+                       "--vendor-poses", "20", "--json", str(path))
+    assert code == 0, out
+    lines = out.splitlines()
+    assert lines[0].split() == ["robot", "IK", "family", "verdict", "worst", "residual",
+                                "complete", "time"]
+    planar, ur5 = lines[2].split(), lines[3].split()
+    assert planar[:3] == ["planar_3r", "numerical", "PASS"] and planar[4].endswith("%*")
+    assert ur5[:3] == ["ur5", "offset_wrist", "PASS"] and ur5[4] == "100.00%"
+    assert lines[-1] == "all checks passed" and "2 robot(s) checked in" in out
+    assert "2 passed, 0 failed" in out
+    assert max(len(line) for line in lines) <= 100
+    data = json.loads(path.read_text())
+    assert data["passed"] and [r["name"] for r in data["robots"]] == ["planar_3r", "ur5"]
+    checks = data["robots"][1]["checks"]
+    assert set(checks) == {"generated", "validators", "fk vs pin", "vendor", "ik vs pin",
+                           "ik vs vendor"}
+    ik = checks["ik vs pin"]
+    assert ik["ok"] and ik["seconds"] > 0 and ik["figures"]["samples"] == 36
+    assert ik["figures"]["counts"]["wrong"] == 0 and ik["figures"]["completeness"] == 100
+    assert ik["figures"]["worst_residual"] == max(ik["figures"]["residuals"]["position_max"],
+                                                  ik["figures"]["residuals"]["rotation_max"])
+    assert float(ur5[3]) == pytest.approx(data["robots"][1]["worst_residual"], rel=0.06)
+    assert data["robots"][0]["checks"]["vendor"] is None  # does not apply: no vendor file
+    code, _, err = run(capsys, "check", "planar_3r", "--json", str(path))
+    assert code == 2 and "--force" in err  # an existing file with other content stays
 
 
 def test_check_without_the_vendor_file_fails_its_columns(capsys, tmp_path) -> None:

@@ -36,7 +36,13 @@ from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 from dhkin.urdf import expand_xacro, generate, text_notes
 from dhkin.validators import check_urdf_executable
-from dhkin.xml_text import XACRO_DIRECTIVES, comment_body, comment_text
+from dhkin.xml_text import (
+    NAME_RULE,
+    ROBOT_NAME_RULE,
+    XACRO_DIRECTIVES,
+    comment_body,
+    comment_text,
+)
 
 from .conftest import REPO
 
@@ -57,10 +63,13 @@ HOSTILE_TEXTS = [
 #: Names the loader accepts: the edges of the allowed set go through every validator.
 EDGE_NAMES = {"robot": "_my-arm_2", "joint": "j--1", "link": "L-2_"}
 
-#: Names that are not names (dhkin.xml_text.NAME_RULE), for every name field.
+#: Names that are not names (dhkin.xml_text.NAME_RULE), for every name field; '/' only joins
+#: the parts of a joint or link name (not first, not last, not doubled, not before a digit).
 BAD_NAMES: list[Any] = ["", "1st", "a b", "a<b", "a&b", 'a"b', "a'b", "${x}", "$(arg x)", "a.b",
-                        "a/b", "a:b", "Gr\u00f6\u00dfe", "\u65e5\u672c", "joint\n", "a\tb", 42,
-                        None, True]
+                        "/a", "a/", "a//b", "a/1b", "a:b", "Gr\u00f6\u00dfe", "\u65e5\u672c",
+                        "joint\n", "a\tb", 42, None, True]
+#: Names a joint or link may have but a robot (its xacro macro, its file names) may not.
+JOINT_ONLY_NAMES = ["a/b", "wx250s/gripper_link"]
 
 RNG_SEED = 20241124
 
@@ -227,7 +236,8 @@ def _bad_name_cases() -> list[tuple[str, Any]]:
     fields = ["name", "joints[0].name", "joints[2].name", "joints[5].link"]
     # A joint's name and link are optional: left empty (None) they take their documented
     # defaults (test_empty_optional_names_take_their_defaults); the table's name is required.
-    return [(field, bad) for field in fields for bad in BAD_NAMES
+    return [(field, bad) for field in fields
+            for bad in BAD_NAMES + (JOINT_ONLY_NAMES if field == "name" else [])
             if not (bad is None and field.startswith("joints"))]
 
 
@@ -246,8 +256,9 @@ def test_empty_optional_names_take_their_defaults(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("field", "bad"), _bad_name_cases())
 def test_bad_names_are_rejected_with_the_field_named(field: str, bad: Any, tmp_path: Path) -> None:
-    """A name outside [A-Za-z_][A-Za-z0-9_-]*: DHError '<file>: <field>: expected a name of
-    letters, digits, '_' or '-' ...' with field and value set."""
+    """A name outside [A-Za-z_][A-Za-z0-9_-]* (joints and links: such parts joined by '/'):
+    DHError '<file>: <field>: expected a name of letters, digits, '_' or '-' ...' with field
+    and value set."""
     data = table_data()
     if field == "name":
         data["name"] = bad
@@ -257,9 +268,8 @@ def test_bad_names_are_rejected_with_the_field_named(field: str, bad: Any, tmp_p
     table_file = write_table(tmp_path, data)
     with pytest.raises(dhkin.DHError) as info:
         dhkin.load(table_file)
-    assert str(info.value).startswith(
-        f"{table_file}: {field}: expected a name of letters, digits, '_' or '-' starting with "
-        "a letter or '_' (ASCII only), got ")
+    rule = ROBOT_NAME_RULE if field == "name" else NAME_RULE
+    assert str(info.value).startswith(f"{table_file}: {field}: expected {rule}, got ")
     assert info.value.field == field and info.value.value == bad
 
 
@@ -320,10 +330,12 @@ def test_a_table_file_name_xml_cannot_hold_is_named(tmp_path: Path) -> None:
     assert info.value.field == "file name"
 
 
-@pytest.mark.parametrize("prefix", ["a b", "${x}", "$(arg prefix)", "r1/", "<", "1_", "\u00fc_"])
+@pytest.mark.parametrize("prefix", ["a b", "${x}", "$(arg prefix)", "/r1", "r1//", "<", "1_",
+                                    "\u00fc_"])
 def test_bad_prefix_is_an_input_error(prefix: str) -> None:
     robot = dhkin.load("planar_2r")
-    with pytest.raises(dhkin.InputError, match=r"^prefix: expected a name of letters") as info:
+    with pytest.raises(dhkin.InputError, match=r"^prefix: expected '' or text that makes names "
+                                               r"of names") as info:
         robot.urdf(prefix=prefix)
     assert info.value.field == "prefix" and info.value.value == prefix
 

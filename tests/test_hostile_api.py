@@ -197,7 +197,7 @@ def test_ik_on_a_one_joint_table_answers(tmp_path: Path) -> None:
 def test_check_on_a_one_joint_table_reports_without_a_traceback(capsys, tmp_path: Path) -> None:
     path = table_file(tmp_path, 1)
     code, out, err = run(capsys, "check", str(path), "--ik-poses", "10", "--vendor-poses", "10",
-                         "--reference-dir", str(tmp_path))
+                         "--reference-dir", str(tmp_path), "--details")
     assert "Traceback" not in err
     assert "numerical" in out and "wrong 0" in out
     # The table has no generated files next to it: the "generated" column fails, honestly.
@@ -318,8 +318,7 @@ def test_cli_broken_pipe_in_a_real_pipe() -> None:
     try:
         result = subprocess.run([sys.executable, "-m", "dhkin.cli", "fk", "ur5", "0", "0", "0",
                                  "0", "0", "0"], stdout=write_end, stderr=subprocess.PIPE,
-                                text=True, check=False, cwd=REPO,
-                                env={**os.environ, "PYTHONPATH": str(REPO / "src")})
+                                text=True, check=False, cwd=REPO)  # the installed dhkin
     finally:
         os.close(write_end)
     assert result.returncode == EXIT_BROKEN_PIPE
@@ -416,7 +415,8 @@ URDF_FAULTS: dict[str, tuple[Callable[[str], str | bytes], str]] = {
                  r"Pinocchio cannot build a model \(Joint \[shoulder_pan_joint\] is of type "
                  r"REVOLUTE but it does not specify limits\)"),
     "bad number": (lambda t: t.replace("lower=\"-6.283185307179586\"", "lower=\"abc\"", 1),
-                   r"lower value \(abc\) is not a valid float"),
+                   r"joint 'shoulder_pan_joint' \(line \d+\) limit lower: expected a number, "
+                   r"got 'abc'"),
 }
 
 

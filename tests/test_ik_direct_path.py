@@ -106,7 +106,7 @@ def test_direct_path_declines_refined_tables(load_robot):
 
 @pytest.mark.parametrize("name", EXACT_TABLES)
 def test_direct_path_on_vendor_poses(name):
-    """Targets by Pinocchio on the vendor URDF (../shared/reference), not our FK: random, q5 = 0,
+    """Targets by Pinocchio on the vendor URDF (robots/vendor), not our FK: random, q5 = 0,
     |q5| in [1e-12, 1e-6], special angles and shoulder-singular poses, without a seed and seeded
     with the sampled q moved by 0.05 rad: the direct path answers as the pipeline does; the
     vendor's rounded constants (UR: pi/2 as 1.570796327) leave random poses regular."""

@@ -1,6 +1,6 @@
 """IK of poses made by the vendors' own URDFs, checked on those URDFs (issue "IK core v2").
 
-Targets come from Pinocchio on ``../shared/reference`` (never from our own FK: a pose made by our
+Targets come from Pinocchio on ``robots/vendor`` (never from our own FK: a pose made by our
 model is the one pose a bug in our model cannot miss), and every returned solution is put back
 through the vendor's URDF. The IK is seeded with the sampled q.
 

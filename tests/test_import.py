@@ -1,6 +1,6 @@
 """`dhkin import`: URDF / xacro descriptions -> DH tables, checked against the description.
 
-Every vendor URDF of ../shared/reference is imported with the base and tip frames its README
+Every vendor URDF of robots/vendor is imported with the base and tip frames its README
 gives, in both conventions; the written table is loaded back, its URDF generated through xacro
 and compared with the vendor URDF by Pinocchio (``compare_with_urdf``: the round trip), and its
 limits are the description's. The family the import reports is the one each arm's geometry has.
@@ -250,7 +250,11 @@ def test_branches_and_mimic_joints_are_listed(tmp_path: Path) -> None:
     assert result.ignored == ("finger_a_joint (prismatic, off the chain)",
                               "finger_b_joint (mimics finger_a_joint)")
     assert "ignored: finger_a_joint" in result.summary()
-    with pytest.raises(URDFError, match=r"several leaf links \['tool0', 'finger_a', "):
+    # Among several leaves the default tip is tool0 (ROS-Industrial's), else --tip is needed.
+    assert import_description(path).table.joint_names == ["joint_1", "joint_2"]
+    path.write_text(text.replace('"tool0"', '"tcp"'))
+    with pytest.raises(URDFError, match=r"several leaf links \['tcp', 'finger_a', .* and none "
+                                        r"is tool0; expected --tip"):
         import_description(path)
 
 
@@ -316,8 +320,11 @@ def test_not_a_urdf(tmp_path: Path) -> None:
                                         r"\(mismatched tag at line 1, column"):
         import_description(broken)
     binary = tmp_path / "binary.urdf"
-    binary.write_bytes(b"\xff\xfe\x00<robot")
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\x00<robot")
     with pytest.raises(URDFError, match="not UTF-8"):
+        import_description(binary)
+    binary.write_bytes(b"\xff\xfe\x00<robot")  # a UTF-16 byte-order mark, then odd bytes
+    with pytest.raises(URDFError, match=r"binary\.urdf: not UTF-16-LE text"):
         import_description(binary)
     with pytest.raises(URDFError, match="cannot read"):
         import_description(tmp_path / "missing.urdf")
@@ -326,7 +333,8 @@ def test_not_a_urdf(tmp_path: Path) -> None:
 def test_xacro_error_names_the_users_file(tmp_path: Path) -> None:
     path = tmp_path / "typo.urdf.xacro"
     path.write_text(XACRO.replace("${upper}", "${uper}"))
-    with pytest.raises(URDFError, match=f"{path}: xacro failed .*uper"):
+    line = 1 + XACRO.splitlines().index(next(t for t in XACRO.splitlines() if "${upper}" in t))
+    with pytest.raises(URDFError, match=f"{path}: line {line}: xacro failed .*uper"):
         import_description(path)
 
 
@@ -399,6 +407,6 @@ def test_imported_builtins_cite_their_source() -> None:
     for name in IMPORTED:
         table = dhkin.load(name).table
         vendor = VENDOR_REFERENCES[name]
-        assert f"../shared/reference/{vendor.file} ({vendor.base} -> {vendor.tip})" in table.source
+        assert f"robots/vendor/{vendor.file} ({vendor.base} -> {vendor.tip})" in table.source
         assert "Upstream (the file's first comment): github.com/" in table.source
         assert VENDOR_IMPORTS[vendor.file][:2] == (vendor.base, vendor.tip)

@@ -1,6 +1,6 @@
 """Seed 000 (ABB IRB 1200-7/0.7): its closed-form forward kinematics, checked against Pinocchio.
 
-The seed (../shared/seeds/000_*.txt, Chinese, formulas in LaTeX) gives a standard DH table
+The seed (tests/data/seeds/000_*.txt, Chinese, formulas in LaTeX) gives a standard DH table
 (d, theta, r, alpha, offset) with offset -90 deg on joint 2 and +-180 deg on joint 6, the link
 matrices A_1..A_6, and MATLAB-simplified symbolic entries n, o, a, p of 0_6T = A_1 ... A_6 in
 terms of q_1..q_6; further on, 3_6T = A_4 A_5 A_6, the wrist centre e = p - D6 a, a second
@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 import dhkin
 from dhkin.transforms import invert, rot_z
 
-from .conftest import SHARED
+from .conftest import SEED_DOCUMENTS
 from .test_fk_oracle import special_grid
 
 ROBOT = "abb_irb1200_7_70"
@@ -48,8 +48,8 @@ Array = NDArray[np.float64]
 
 
 def seed_text() -> str:
-    files = sorted((SHARED / "seeds").glob("000_*.txt"))
-    assert len(files) == 1, f"expected one seed 000 file in {SHARED / 'seeds'}, found {files}"
+    files = sorted(SEED_DOCUMENTS.glob("000_*.txt"))
+    assert len(files) == 1, f"expected one seed 000 file in {SEED_DOCUMENTS}, found {files}"
     return files[0].read_text(encoding="utf-8")
 
 

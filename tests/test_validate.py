@@ -179,7 +179,7 @@ def test_default_reference_is_the_rounded_urdf(ur5: dhkin.Robot) -> None:
 
 
 def test_vendor_reference_makes_the_targets(ur5: dhkin.Robot) -> None:
-    """--reference ../shared/reference/ur5.urdf: the targets are Pinocchio's FK of the vendor
+    """--reference robots/vendor/ur5.urdf: the targets are Pinocchio's FK of the vendor
     file at the sampled q, ~1e-10 from the table's own FK (not 0); frames from VENDOR_REFERENCES."""
     oracle = Oracle(ur5, UR5_VENDOR)
     report = validate(ur5, oracle, n=40, seed=1, reference=UR5_VENDOR)

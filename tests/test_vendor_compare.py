@@ -4,7 +4,7 @@
 so it must cope with other link names, extra fixed frames (``world``, ``base_link_inertia``,
 ``ft_frame``...) and continuous joints (the vendor UR3's wrist_3_joint: Pinocchio nq = 7, nv = 6).
 
-* ../shared/reference (UniversalRobots ROS2 description, ABB abb_experimental, AUBO
+* robots/vendor (UniversalRobots ROS2 description, ABB abb_experimental, AUBO
   aubo_description): ur3/ur5/ur10 and the IRB 1200 base_link -> tool0 (and flange), the AUBO i10
   base_link -> wrist3_Link (no tool0 upstream), at 1e-9 m and rad. The UR files round pi/2 to
   1.570796327 and carry ~2e-11 m residues, so 1e-9 is as tight as they allow.

@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import sys
 import tempfile
+import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -52,10 +53,28 @@ VENDOR_POSES = 2000
 
 @dataclass(frozen=True)
 class CheckCell:
-    """One check of one robot: a short text for the table and whether it passed."""
+    """One check of one robot: whether it passed, a short text with its figures, the seconds it
+    took (set by :func:`check_robot`) and, for the IK validations, the figures as data
+    (:func:`validation_figures`)."""
 
     ok: bool
     text: str
+    seconds: float = 0.0
+    figures: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class RobotCheck:
+    """Every check of one robot (None: the check does not apply), its IK family and time."""
+
+    name: str
+    family: str
+    cells: dict[str, CheckCell | None]
+    seconds: float
+
+    @property
+    def ok(self) -> bool:
+        return all(c.ok for c in self.cells.values() if c is not None)
 
 
 @dataclass(frozen=True)
@@ -86,7 +105,7 @@ def check_validators(robot: Robot) -> CheckCell:
 
 
 def check_fk(robot: Robot, seed: int) -> CheckCell:
-    """Own numpy FK equals Pinocchio FK on the generated URDF (max |T_own - T_pin|)."""
+    """Own numpy FK equals Pinocchio FK on the generated URDF (max ``|T_own - T_pin|``)."""
     q = robot.table.random_q(FK_SAMPLES, np.random.default_rng(seed))
     deviation = float(np.abs(robot.fk(q) - robot.reference().fk(q)).max())
     return CheckCell(deviation <= FK_TOLERANCE, f"{deviation:.1e}")
@@ -119,18 +138,31 @@ def _short(value: str | float | None) -> str:
     return value if isinstance(value, str) else repr(value)
 
 
-def _ik_text(report: ValidationReport) -> str:
-    """Samples, max residual, completeness and failure counts of a validation, for a cell."""
-    residual = max(report.residuals.get("position_max", 0.0),
-                   report.residuals.get("rotation_max", 0.0))
+def validation_figures(report: ValidationReport) -> dict[str, Any]:
+    """The figures of a validation as data: the report's JSON (counts, rates, residuals, by set
+    and configuration, reference, seconds) without its failing samples, which ``dhkin validate``
+    writes to a failure file; their number stays (``failure_count``). Adds the worst residual
+    (m or rad, the larger) and the completeness (%: samples neither missing, missing a branch
+    nor unsolved)."""
+    data = report.to_json()
+    data["failure_count"] = len(data.pop("failures"))
+    data["worst_residual"] = max(report.residuals.get("position_max", 0.0),
+                                 report.residuals.get("rotation_max", 0.0))
     counts = report.counts
     incomplete = counts["missing"] + counts["no_solution"] + counts["missing_branch"]
-    text = (f"{report.samples} poses, max {residual:.1e}, "
-            f"complete {100 * (report.samples - incomplete) / report.samples:.2f}%, "
+    data["completeness"] = 100 * (report.samples - incomplete) / report.samples
+    return data
+
+
+def _ik_text(figures: dict[str, Any]) -> str:
+    """Samples, max residual, completeness and failure counts of a validation, for a cell."""
+    counts = figures["counts"]
+    text = (f"{figures['samples']} poses, max {figures['worst_residual']:.1e}, "
+            f"complete {figures['completeness']:.2f}%, "
             f"wrong {counts['wrong']}, missing {counts['missing']}, "
             f"missing-branch {counts['missing_branch']}, "
             f"discontinuous {counts['discontinuous']}")
-    if not report.complete_expected:
+    if not figures["complete_expected"]:
         text += " (1 solution/call)"
     return text
 
@@ -141,8 +173,8 @@ def check_ik(robot: Robot, poses: int, seed: int) -> CheckCell:
 
     n = poses if robot.complete_ik else min(poses, NUMERICAL_POSES)
     report = validate(robot, n=n, seed=seed, progress=sys.stderr.isatty(), reference="exact")
-    family = robot.ik_family
-    return CheckCell(report.ok, f"{family}: {_ik_text(report)}")
+    figures = validation_figures(report)
+    return CheckCell(report.ok, f"{robot.ik_family}: {_ik_text(figures)}", figures=figures)
 
 
 def check_ik_vendor(robot: Robot, reference_dir: Path | None, poses: int,
@@ -158,15 +190,21 @@ def check_ik_vendor(robot: Robot, reference_dir: Path | None, poses: int,
         return CheckCell(False, f"missing {vendor.file}")
     report = validate(robot, n=poses, seed=seed, progress=sys.stderr.isatty(),
                       reference=reference_dir / vendor.file, base=vendor.base, tip=vendor.tip)
-    return CheckCell(report.ok, f"{vendor.file}: {_ik_text(report)}")
+    figures = validation_figures(report)
+    return CheckCell(report.ok, f"{vendor.file}: {_ik_text(figures)}", figures=figures)
 
 
 COLUMNS: tuple[str, ...] = ("generated", "validators", "fk vs pin", "vendor", "ik vs pin",
                             "ik vs vendor")
 
 
-def check_robot(robot: Robot, options: CheckOptions) -> dict[str, CheckCell | None]:
-    """Run every check on one robot; a check that raises a dhkin error is a failed cell."""
+#: The columns whose cells are IK validations (with figures; see :func:`validation_figures`).
+IK_COLUMNS: tuple[str, ...] = ("ik vs pin", "ik vs vendor")
+
+
+def check_robot(robot: Robot, options: CheckOptions) -> RobotCheck:
+    """Run every check on one robot, timing each; a check that raises a dhkin error is a failed
+    cell."""
     runs: dict[str, Callable[[], CheckCell | None]] = {
         "generated": lambda: check_generated(robot),
         "validators": lambda: check_validators(robot),
@@ -176,29 +214,18 @@ def check_robot(robot: Robot, options: CheckOptions) -> dict[str, CheckCell | No
         "ik vs vendor": lambda: check_ik_vendor(robot, options.reference_dir,
                                                 options.vendor_poses, options.seed),
     }
+    started = time.perf_counter()
     cells: dict[str, CheckCell | None] = {}
     for column, run in runs.items():
+        begun = time.perf_counter()
         try:
-            cells[column] = run()
+            cell = run()
         except DhkinError as exc:
-            cells[column] = CheckCell(False, f"error: {exc}")
-    return cells
-
-
-def format_table(rows: dict[str, dict[str, CheckCell | None]]) -> str:
-    """Plain-text summary: one row per robot, '-' where a check does not apply."""
-    header = ("robot", *COLUMNS, "result")
-    lines = []
-    for name, cells in rows.items():
-        texts = [c.text if c is not None else "-" for c in cells.values()]
-        passed = all(c.ok for c in cells.values() if c is not None)
-        lines.append((name, *texts, "PASS" if passed else "FAIL"))
-    widths = [max(len(str(r[k])) for r in [header, *lines]) for k in range(len(header))]
-    out = ["  ".join(str(h).ljust(w) for h, w in zip(header, widths, strict=True))]
-    out.append("  ".join("-" * w for w in widths))
-    out += ["  ".join(str(c).ljust(w) for c, w in zip(r, widths, strict=True)) for r in lines]
-    return "\n".join(out)
-
-
-def all_passed(rows: dict[str, dict[str, CheckCell | None]]) -> bool:
-    return all(c.ok for cells in rows.values() for c in cells.values() if c is not None)
+            cell = CheckCell(False, f"error: {exc}")
+        cells[column] = None if cell is None else replace(cell,
+                                                          seconds=time.perf_counter() - begun)
+    try:
+        family = robot.ik_family
+    except DhkinError:
+        family = "none"
+    return RobotCheck(robot.name, family, cells, time.perf_counter() - started)

@@ -8,14 +8,16 @@ import json
 import os
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
+from dhkin.cli_check import cmd_check
+from dhkin.cli_describe import add_export_parser, add_import_parser, package_arg, packages_of
 from dhkin.cli_input import (
     EXIT_BAD_INPUT,
     EXIT_BROKEN_PIPE,
     EXIT_FAILED,
+    EXIT_INTERRUPTED,
     EXIT_OK,
     Parser,
     angles,
@@ -23,28 +25,23 @@ from dhkin.cli_input import (
     force_arg,
     ik_target,
     input_error_text,
+    interrupted_text,
     non_negative_float,
     non_negative_int,
     output_name,
+    output_paths,
+    path_states,
     positive_float,
     positive_int,
-    xacro_arguments,
 )
 from dhkin.errors import DhkinError, InputError
-from dhkin.robot import Robot, builtin_dir, builtin_names, load
+from dhkin.robot import Robot, builtin_names, load
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import matrix_to_rpy
 
 
 def _robot_arg(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("robot", help="built-in robot name (see `dhkin robots`) or a table file")
-
-
-def _default_reference_dir() -> Path | None:
-    """../shared/reference next to the working directory or next to the source checkout."""
-    candidates = [Path.cwd().parent / "shared" / "reference",
-                  Path(__file__).resolve().parents[3] / "shared" / "reference"]
-    return next((c for c in candidates if c.is_dir()), None)
 
 
 def cmd_robots(args: argparse.Namespace) -> int:
@@ -56,28 +53,21 @@ def cmd_robots(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def cmd_export(args: argparse.Namespace) -> int:
-    robot = load(args.robot)
-    if args.format == "opw":
-        from dhkin.opw_yaml import export_opw
-
-        print(export_opw(robot.table, args.output, force=args.force))
-        return EXIT_OK
-    from dhkin.urdf import export
-
-    for path in export(robot.table, args.output, force=args.force):
-        print(path)
-    return EXIT_OK
-
-
 def cmd_compare(args: argparse.Namespace) -> int:
     """Poses and joints (names, types, limits, velocities) of a table against another URDF.
     Exit 1 on a pose deviation above --tolerance; with --strict also on any joint difference."""
     from dhkin.compare import compare_with_urdf
+    from dhkin.vendors import VendorReference, shipped_reference
 
-    report = compare_with_urdf(load(args.robot), args.urdf, base_frame=args.base_frame,
-                               tip=args.tip, robot_tip=args.robot_tip, n=args.n, seed=args.seed,
-                               tolerance=args.tolerance)
+    robot = load(args.robot)
+    # Without a URDF: the robot's vendor URDF shipped with dhkin, with its frames.
+    urdf, listed = ((args.urdf, VendorReference(args.urdf, "base_link", "tool0"))
+                    if args.urdf is not None else shipped_reference(robot.name, "urdf"))
+    report = compare_with_urdf(robot, urdf, base_frame=args.base_frame or listed.base,
+                               tip=args.tip or listed.tip,
+                               robot_tip=args.robot_tip or listed.robot_tip,
+                               n=args.n, seed=args.seed, tolerance=args.tolerance,
+                               packages=packages_of(args))
     print(report.summary())
     if not report.ok:
         print(f"worst joint vector (rad): {np.array2string(report.worst_q, precision=6)}")
@@ -86,25 +76,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                                      " (exit 0; --strict makes this a failure)"))
     passed = report.strict_ok if args.strict else report.ok
     return EXIT_OK if passed else EXIT_FAILED
-
-
-def cmd_import(args: argparse.Namespace) -> int:
-    from dhkin.files import check_output, write_file
-    from dhkin.importer import import_description
-
-    output = Path(args.output)
-    if output.suffix not in (".yaml", ".yml"):
-        raise InputError(f"-o {output}: expected a .yaml table file name", field="output",
-                         value=str(output), expected="a path ending in .yaml")
-    check_output(output, "-o", force=True)  # folder, link, writable; the content is compared last
-    result = import_description(args.description, base=args.base, tip=args.tip,
-                                convention=args.convention,
-                                units={"length": args.length, "angle": args.angle},
-                                xacro_args=xacro_arguments(args.xacro_arg), name=args.name)
-    write_file(output, result.yaml(), "-o", force=args.force)
-    print(result.summary())
-    print(f"wrote {output}")
-    return EXIT_OK
 
 
 def _joint_values(robot: Robot, values: Sequence[float], degrees: bool,
@@ -201,12 +172,14 @@ def cmd_validate(args: argparse.Namespace) -> int:
         # The failure file names its reference; --reference/--base/--tip override it.
         report = replay(robot, own_ik(robot) if ik is None else ik, args.replay, ik_name=name,
                         reference=args.reference, base=args.base, tip=args.tip,
-                        timeout=args.timeout, isolate=args.isolate)
+                        timeout=args.timeout, isolate=args.isolate,
+                        packages=packages_of(args))
     else:
         report = validate(robot, ik, n=args.n, seed=args.seed, tolerance=args.tolerance,
                           joint_tolerance=args.joint_tolerance, progress=sys.stderr.isatty(),
                           ik_name=name, reference=args.reference, base=args.base,
-                          tip=args.tip, timeout=args.timeout, isolate=args.isolate)
+                          tip=args.tip, timeout=args.timeout, isolate=args.isolate,
+                          packages=packages_of(args))
     print(report.summary())
     if args.json:
         write_file(args.json, json.dumps(report.to_json(), indent=1), "--json", args.force)
@@ -221,28 +194,6 @@ def cmd_validate(args: argparse.Namespace) -> int:
         print(f"failures written to {path} (rerun on the same reference: dhkin validate "
               f"{args.robot} --replay {path}{' --ik ' + args.ik if args.ik else ''})")
     return EXIT_OK if report.ok else EXIT_FAILED
-
-
-def cmd_check(args: argparse.Namespace) -> int:
-    from dhkin.checks import VENDOR_POSES, CheckOptions, all_passed, check_robot, format_table
-
-    if not args.all and not args.robots:
-        raise DhkinError("check: name robots to check, or --all for every built-in robot")
-    names = builtin_names() if args.all else args.robots
-    reference_dir = Path(args.reference_dir) if args.reference_dir else _default_reference_dir()
-    options = CheckOptions(reference_dir=reference_dir, ik_poses=args.ik_poses,
-                           vendor_poses=(VENDOR_POSES if args.vendor_poses is None
-                                         else args.vendor_poses), seed=args.seed)
-    print(f"built-in robots: {builtin_dir()}", file=sys.stderr)
-    print(f"vendor references: {reference_dir or 'not found'}", file=sys.stderr)
-    rows = {}
-    for k, name in enumerate(names, 1):
-        print(f"[{k}/{len(names)}] checking {name} ...", file=sys.stderr, flush=True)
-        rows[name] = check_robot(load(name), options)
-    print(format_table(rows))
-    passed = all_passed(rows)
-    print("all checks passed" if passed else "SOME CHECKS FAILED")
-    return EXIT_OK if passed else EXIT_FAILED
 
 
 # --------------------------------------------------------------------------------------------
@@ -337,25 +288,17 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("robots", help="list the built-in robots")
     p.set_defaults(run=cmd_robots)
 
-    p = sub.add_parser("export", help="write <name>_macro.xacro, <name>.urdf.xacro, <name>.urdf "
-                                      "(or, --format opw, <name>_opw.yaml)")
-    _robot_arg(p)
-    p.add_argument("-o", "--output", required=True, type=output_name,
-                   help="output folder (created if needed)")
-    force_arg(p)
-    p.add_argument("--format", choices=("urdf", "opw"), default="urdf",
-                   help="urdf: the xacro macro, its top-level xacro and the URDF (default); "
-                        "opw: MoveIt opw_kinematics parameters (spherical-wrist arms with an "
-                        "ortho-parallel basis; an error for any other arm)")
-    p.set_defaults(run=cmd_export)
+    add_export_parser(sub)
 
     p = sub.add_parser("compare", help="compare a robot with another URDF (e.g. the vendor's): "
                                        "poses, and joint names, types, limits and velocities")
     _robot_arg(p)
-    p.add_argument("urdf", help="the other URDF file")
-    p.add_argument("--base-frame", default="base_link", help="base frame in the other URDF")
-    p.add_argument("--tip", default="tool0", help="tip frame in the other URDF")
-    p.add_argument("--robot-tip", default="tool0", help="tip frame of our URDF")
+    p.add_argument("urdf", nargs="?",
+                   help="the other URDF file (default: the robot's vendor URDF shipped with "
+                        "dhkin, robots/vendor, with its frames from dhkin.vendors)")
+    p.add_argument("--base-frame", help="base frame in the other URDF (default base_link)")
+    p.add_argument("--tip", help="tip frame in the other URDF (default tool0)")
+    p.add_argument("--robot-tip", help="tip frame of our URDF (default tool0)")
     p.add_argument("-n", type=positive_int, default=1000,
                    help="joint vectors to sample (default 1000)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
@@ -364,24 +307,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--strict", action="store_true",
                    help="also fail (exit 1) on any difference of joint names, types, limits or "
                         "velocities (always reported)")
+    package_arg(p)
     p.set_defaults(run=cmd_compare)
 
-    p = sub.add_parser("import", help="import a URDF or xacro description as a DH table")
-    p.add_argument("description", help="the URDF or xacro file")
-    p.add_argument("-o", "--output", required=True, type=output_name,
-                   help="the table file to write (.yaml)")
-    p.add_argument("--base", help="base link of the chain (default: the root link)")
-    p.add_argument("--tip", help="tip link of the chain (default: the single leaf link)")
-    p.add_argument("--convention", choices=("standard", "modified"), default="standard",
-                   help="DH convention (default standard)")
-    p.add_argument("--length", choices=("m", "mm"), default="m", help="length unit (default m)")
-    p.add_argument("--angle", choices=("deg", "rad"), default="deg",
-                   help="angle unit (default deg)")
-    p.add_argument("--xacro-arg", action="append", metavar="NAME:=VALUE",
-                   help="a xacro argument (repeatable)")
-    p.add_argument("--name", help="the table's robot name (default: the file name's stem)")
-    p.add_argument("--force", action="store_true", help="replace an existing output file")
-    p.set_defaults(run=cmd_import)
+    add_import_parser(sub)
 
     p = sub.add_parser("fk", help="forward kinematics base_link -> tool0 (or --frame)")
     _robot_arg(p)
@@ -440,12 +369,14 @@ def build_parser() -> argparse.ArgumentParser:
                                     "records)")
     p.add_argument("--reference", help="description that makes the targets and checks the "
                                        "solutions: 'rounded' (default: the generated URDF with "
-                                       "10 significant digits), 'exact' (the generated URDF) or "
-                                       "a vendor URDF file of the same robot")
+                                       "10 significant digits), 'exact' (the generated URDF), "
+                                       "'vendor' (the robot's vendor URDF shipped with dhkin) "
+                                       "or a vendor URDF file of the same robot")
     p.add_argument("--base", help="base frame in the --reference URDF (default: from "
                                   "dhkin.vendors for a listed robot, else base_link)")
     p.add_argument("--tip", help="frame of the --reference URDF equal to the table's tool0 "
                                  "(default: from dhkin.vendors for a listed robot, else tool0)")
+    package_arg(p)
     p.set_defaults(run=cmd_validate)
 
     p = sub.add_parser("singularity", help="singularity classes, factored det J and Pinocchio's "
@@ -460,11 +391,17 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("check", help="the main job: regenerate, validate, cross-check")
     p.add_argument("robots", nargs="*", help="robots to check (default with --all: built-ins)")
     p.add_argument("--all", action="store_true", help="check every built-in robot")
-    p.add_argument("--reference-dir", help="folder of vendor URDFs (default ../shared/reference)")
+    p.add_argument("--reference-dir", help="folder of vendor URDFs (default: the ones shipped "
+                                           "with dhkin, robots/vendor)")
     p.add_argument("--ik-poses", type=positive_int, default=10_000, help="IK poses per robot")
     p.add_argument("--vendor-poses", type=positive_int, default=None,
                    help="IK poses per robot on its vendor URDF (default 2000)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
+    p.add_argument("--details", action="store_true",
+                   help="also print every check's figures, robot by robot")
+    p.add_argument("--json", type=output_name,
+                   help="write every check's figures to this file as JSON")
+    force_arg(p)
     p.set_defaults(run=cmd_check)
     return parser
 
@@ -473,8 +410,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run one subcommand. Every failure of the input (dhkin's errors, files that cannot be read
     or written, text that is not UTF-8, input nested too deeply or too large for memory) is one
     line on stderr, ``dhkin: error: ...``, and exit status 2; a reader of stdout that goes away
-    (``| head``) ends the command quietly."""
-    args = build_parser().parse_args(argv)
+    (``| head``) ends the command quietly; Ctrl-C is one line saying which output files were
+    left as they were (each is written whole or not at all), exit status 130."""
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:
+        print("dhkin: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    outputs = output_paths(args)
+    before = path_states(outputs)
     try:
         status = int(args.run(args))
         sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
@@ -488,6 +432,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (DhkinError, OSError, UnicodeDecodeError, RecursionError, MemoryError) as exc:
         print(f"dhkin: error: {input_error_text(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"dhkin: {interrupted_text(outputs, before)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from collections.abc import Callable, Sequence
 from typing import NoReturn
 
@@ -19,6 +20,10 @@ from dhkin.errors import InputError, one_line
 from dhkin.transforms import xyz_rpy_to_matrix
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+#: Exit status after Ctrl-C (SIGINT): 128 + the signal's number, as shells report it.
+EXIT_INTERRUPTED = 128 + 2
+#: The options that name files or folders a command writes.
+OUTPUT_OPTIONS = ("output", "json", "report", "failures")
 
 #: Exit status when the reader of stdout goes away (``dhkin ik ... | head``): Python's own status
 #: for a broken pipe (the recipe of the ``signal`` module's documentation), quietly.
@@ -98,6 +103,40 @@ def input_error_text(exc: BaseException) -> str:
     if isinstance(exc, MemoryError):
         return "input too large to hold in memory (MemoryError)"
     return one_line(str(exc))
+
+
+def output_paths(args: argparse.Namespace) -> list[str]:
+    """The files and folders a command line writes (-o, --json, --report, --failures given as
+    names; ``dhkin ik --json`` is a flag, not a file)."""
+    return [value for key in OUTPUT_OPTIONS
+            if isinstance(value := getattr(args, key, None), str)]
+
+
+def path_states(paths: Sequence[str]) -> list[tuple[int, int] | None]:
+    """(modification time ns, size) of each path, or None where nothing exists."""
+    states: list[tuple[int, int] | None] = []
+    for path in paths:
+        try:
+            status = os.stat(path)
+        except OSError:
+            states.append(None)
+        else:
+            states.append((status.st_mtime_ns, status.st_size))
+    return states
+
+
+def interrupted_text(paths: Sequence[str], before: Sequence[tuple[int, int] | None]) -> str:
+    """The one line after Ctrl-C: which outputs are left as they were and which were written
+    before the interrupt (dhkin writes each file whole or not at all: dhkin.files)."""
+    after = path_states(paths)
+    kept = [path for path, old, new in zip(paths, before, after, strict=True) if old == new]
+    written = [path for path in paths if path not in kept]
+    parts = []
+    if written:
+        parts.append(f"{', '.join(written)} written")
+    if kept:
+        parts.append(f"{', '.join(kept)} left as {'it was' if len(kept) == 1 else 'they were'}")
+    return "interrupted" + (f"; {'; '.join(parts)}" if parts else "")
 
 
 def xacro_arguments(values: Sequence[str] | None) -> dict[str, str]:

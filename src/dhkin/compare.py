@@ -21,6 +21,7 @@ verdict, while :attr:`CompareReport.strict_ok` also requires equal joints.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,8 +45,9 @@ from dhkin.transforms import pose_error
 #: It allows for deg <-> rad rounding only. A table value v in deg becomes v * fl(pi/180): the
 #: constant and the product are each rounded once, 2u relative with u = 2**-53; the generated
 #: URDF writes repr() (exact), and parsing the other URDF's decimal text rounds once more (u).
-#: So a table giving the other file's value in deg lands within 3u|x| < 3.4e-16 |x| of it:
-#: below 1e-12 for every |x| < 2900 rad or m (real joints: |x| <= 4 pi, velocities < 30 rad/s).
+#: So a table giving the other file's value in deg lands within ``3u |x| < 3.4e-16 |x|`` of
+#: it: below 1e-12 for every ``|x| < 2900`` rad or m (real joints: ``|x| <= 4 pi``, velocities
+#: < 30 rad/s).
 #: Any rounding a person makes is far larger: 170 deg vs ABB's 2.967 rad is 6e-5, 3.1416 vs pi
 #: is 7e-6, UR's 1.570796327 for pi/2 is 2e-10.
 LIMIT_TOLERANCE = 1e-12
@@ -229,10 +231,12 @@ def _refuse_mimic_joints(other: Reference, base_frame: str, tip: str) -> None:
 def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base_link",
                       tip: str = "tool0", robot_tip: str = "tool0", n: int = 1000, seed: int = 0,
                       tolerance: float = DEFAULT_TOLERANCE,
-                      limit_tolerance: float = LIMIT_TOLERANCE) -> CompareReport:
+                      limit_tolerance: float = LIMIT_TOLERANCE,
+                      packages: Mapping[str, str | Path] | None = None) -> CompareReport:
     """Compare ``robot`` (base_link -> robot_tip) with ``urdf_path`` (base_frame -> tip): poses
     over ``n`` joint vectors (``tolerance``, m and rad) and the chain joints' names, types,
-    limits and velocities (``limit_tolerance``)."""
+    limits and velocities (``limit_tolerance``). A xacro file is expanded (``packages``:
+    {NAME: folder} for its ``$(find NAME)``, see :mod:`dhkin.ros_packages`)."""
     n = check_integer(n, "n", 1)
     seed = check_integer(seed, "seed", 0)
     tolerance = check_tolerance(tolerance)
@@ -242,7 +246,7 @@ def compare_with_urdf(robot: Arm, urdf_path: str | Path, base_frame: str = "base
                          f"{limit_tolerance!r}", field="limit_tolerance", value=limit_tolerance,
                          expected="a finite number >= 0")
     path = Path(urdf_path)
-    other = Reference(read_urdf_file(path), tip=tip, base=base_frame, source=str(path))
+    other = Reference(read_urdf_file(path, packages), tip=tip, base=base_frame, source=str(path))
     _refuse_mimic_joints(other, base_frame, tip)
     ours = robot.reference(tip=robot_tip)
     if other.dof != robot.dof:

@@ -52,6 +52,14 @@ LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3}
 ANGLE_UNITS: dict[str, float] = {"rad": 1.0, "deg": math.pi / 180.0}
 
 
+#: Joint vectors :meth:`DHTable.fk` computes at a time: its temporaries (the link transforms and
+#: their factors, a few dozen arrays of one value per joint and vector) stay near 10 MB, a small
+#: part of the result (128 bytes per vector) of any batch large enough for memory to matter.
+#: Measured by scripts/bench_fk.py on 10^6 UR5 vectors: 1.95 s and a peak of 1.48 x the result
+#: (the input's float copy included), against 2.5 s (1024), 2.8 s (16384) and 3.9 s and 3.0 x
+#: (65536); the whole batch at once took 9.8 s and 18 x.
+FK_CHUNK = 4096
+
 #: Names the generator uses for fixed frames; a table may not give them to its own links.
 RESERVED_LINK_NAMES: tuple[str, ...] = ("base_link", "base", "flange", "tool0")
 
@@ -74,7 +82,7 @@ MAX_JOINTS = 32
 
 
 #: Largest magnitude of a revolute joint's limits, in turns (2 turns: +-720 deg, +-4pi rad). The
-#: widest real joint in robots/ and in the vendor URDFs of ../shared/reference turns +-360.6 deg
+#: widest real joint in robots/ and in the vendor URDFs of robots/vendor turns +-360.6 deg
 #: (Motoman GP7 joint 6), datasheets go to +-400 deg (ABB wrists) and continuous joints are imported
 #: as +-360 deg. The IK lists every in-limit 2pi copy of a solution: within +-2 turns a joint has at
 #: most 6 copies (a 6-joint branch at most 6^6), where +-36000 deg asked for 229 TiB.
@@ -221,14 +229,19 @@ class DHTable:
         return frames
 
     def fk(self, q: ArrayLike) -> NDArray[np.float64]:
-        """base_link -> tool0. q: (n,) -> (4, 4); (N, n) -> (N, 4, 4)."""
+        """base_link -> tool0. q: (n,) -> (4, 4); (N, n) -> (N, 4, 4).
+
+        Computed :data:`FK_CHUNK` joint vectors at a time into the output, so that a large
+        batch needs little more memory than its result (the same products, bit for bit)."""
         Q, single = joint_batch(q, self.dof)
-        A = self.link_transforms(Q)
-        T = np.broadcast_to(self.base, (A.shape[0], 4, 4)).copy()
-        for i in range(self.dof):
-            T = T @ A[:, i]
-        T = T @ self.tool
-        return T[0] if single else T
+        out = np.empty((Q.shape[0], 4, 4))
+        for start in range(0, Q.shape[0], FK_CHUNK):
+            A = self.link_transforms(Q[start:start + FK_CHUNK])
+            T = np.broadcast_to(self.base, (A.shape[0], 4, 4))
+            for i in range(self.dof):
+                T = T @ A[:, i]
+            np.matmul(T, self.tool, out=out[start:start + FK_CHUNK])
+        return out[0] if single else out
 
     def in_limits(self, q: ArrayLike, tolerance: float = 0.0) -> NDArray[np.bool_]:
         """Whether each joint vector lies within [lower - tol, upper + tol] (last axis = joints)."""

@@ -3,21 +3,21 @@
 Every error dhkin raises derives from :class:`DhkinError`, so callers can catch one type. The
 class says *whose* fault it is, whatever the entry point:
 
-==========================  ==============================================================
-:class:`InputError`         an argument of a call is wrong (shape, type, range, a choice
-                            among names): joint values, poses, seeds, tolerances, options
-:class:`DHError`            a DH table (file or object) is invalid
-:class:`URDFError`          a robot description (URDF, xacro) cannot be used as asked
-:class:`RobotNotFoundError` a name is neither a built-in robot nor a table file
-:class:`FamilyError`        a table lacks the structure a family needs (closed-form IK,
-                            analytic singularity factors)
-:class:`UnreachableError`   what was asked does not exist for this robot: a singularity
-                            its joint cannot reach within the limits, a path pose with no
-                            IK solution
-:class:`FileWriteError`     the system refused to write an output file (no space left, a
-                            file size limit, no permission, a read-only file system); the
-                            old file is left as it was
-==========================  ==============================================================
+============================  ============================================================
+:class:`InputError`           an argument of a call is wrong (shape, type, range, a choice
+                              among names): joint values, poses, seeds, tolerances, options
+:class:`DHError`              a DH table (file or object) is invalid
+:class:`URDFError`            a robot description (URDF, xacro) cannot be used as asked
+:class:`RobotNotFoundError`   a name is neither a built-in robot nor a table file
+:class:`FamilyError`          a table lacks the structure a family needs (closed-form IK,
+                              analytic singularity factors)
+:class:`UnreachableError`     what was asked does not exist for this robot: a singularity
+                              its joint cannot reach within the limits, a path pose with no
+                              IK solution
+:class:`FileWriteError`       the system refused to write an output file (no space left, a
+                              file size limit, no permission, a read-only file system); the
+                              old file is left as it was
+============================  ============================================================
 
 Each error carries the parts of its message as attributes, None where they do not apply:
 ``field`` (the argument, table field or file entry at fault, e.g. "q_seed" or "joints[2].a"),

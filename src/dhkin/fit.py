@@ -104,9 +104,11 @@ class URDFChain:
         return np.array([(base * data.oMi[joint_id]).homogeneous for joint_id in reference.chain])
 
 
-def read_chain(urdf: str | Path, base: str, tip: str) -> URDFChain:
-    """Read the chain ``base`` -> ``tip`` of a URDF (a path, or the URDF text) with Pinocchio."""
-    text, source = _urdf_text(urdf)
+def read_chain(urdf: str | Path, base: str, tip: str, source: str | None = None) -> URDFChain:
+    """Read the chain ``base`` -> ``tip`` of a URDF (a path, or the URDF text) with Pinocchio;
+    ``source`` names the file in messages (default: the path, or "<urdf>" for text)."""
+    text, default_source = _urdf_text(urdf)
+    source = default_source if source is None else source
     reference = Reference(text, tip=tip, base=base, source=source)
     model, data = reference.model, reference.data
     config = reference.configuration(np.zeros(reference.dof))
@@ -117,7 +119,9 @@ def read_chain(urdf: str | Path, base: str, tip: str) -> URDFChain:
     for joint_id, name in zip(reference.chain, reference.joint_names, strict=True):
         frames.append((base_inverse * data.oMi[joint_id]).homogeneous)
         column = model.joints[joint_id].idx_v
-        motion = pin.getJointJacobian(model, data, joint_id, pin.ReferenceFrame.LOCAL)[:, column]
+        jacobian = np.reshape(pin.getJointJacobian(model, data, joint_id,
+                                                   pin.ReferenceFrame.LOCAL), (6, model.nv))
+        motion = jacobian[:, column]  # (eigenpy hands a one-column Jacobian back as a vector)
         linear, angular = motion[:3], motion[3:]
         if np.linalg.norm(linear) <= _AXIS_TOLERANCE and np.linalg.norm(angular) > 0.5:
             axes.append(angular / np.linalg.norm(angular))

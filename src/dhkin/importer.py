@@ -26,7 +26,9 @@ q. How the rows are found, in either convention (DESIGN.md, "The DH table file")
    model when one fits within the band) plus per-joint ``correction`` transforms fitted by
    :func:`dhkin.fit.fit_corrections`: corrections appear only where no exact DH exists.
 5. **Datasheet numbers.** Every DH value, base and tool component is written as the shortest
-   decimal (in the table's units) within :data:`CLEAN` of the exact value; limits, velocities
+   decimal (in the table's units) within :data:`CLEAN` of the exact value (lengths in metres;
+   angles in radians divided by the chain's reach in metres, at least 1, so that a rounded
+   angle moves no point of a 300 m chain more than a short arm's); limits, velocities
    and efforts are copied as they are. The written table, read back, is checked against the
    description on :data:`VERIFY_SAMPLES` random joint vectors: at most DEFAULT_TOLERANCE.
 
@@ -56,6 +58,7 @@ from dhkin.dh import DHTable, Joint
 from dhkin.errors import DHError, FamilyError, InputError, URDFError
 from dhkin.fit import URDFChain, chain_deviation, fit_to_chain, read_chain
 from dhkin.ik.family import BAND
+from dhkin.import_names import IMPORTED_TABLE, described_error, table_link_names
 from dhkin.table_file import (
     ANGLE_UNITS,
     LENGTH_UNITS,
@@ -67,7 +70,7 @@ from dhkin.table_file import (
 )
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert, rot_y, xyz_rpy_to_matrix
-from dhkin.xml_text import NAME_RULE, name_problem
+from dhkin.xml_text import ROBOT_NAME_RULE, name_problem
 
 #: Random joint vectors (plus q = 0) on which the written table is checked (fixed seed 0).
 VERIFY_SAMPLES = 1000
@@ -76,6 +79,10 @@ VERIFY_SAMPLES = 1000
 TOOL0_TO_FLANGE = rot_y(-math.pi / 2)
 
 CONVENTIONS = ("standard", "modified")
+#: The tip among several leaf links when none is given (ROS-Industrial's tool frame).
+DEFAULT_TIP = "tool0"
+#: ROS-Industrial's base frame (a fixed frame below base_link): a leaf that is never the tip.
+ROS_INDUSTRIAL_BASE = "base"
 
 
 @dataclass(frozen=True)
@@ -119,14 +126,19 @@ class ImportResult:
 
 def import_description(path: str | Path, base: str | None = None, tip: str | None = None,
                        convention: str = "standard", units: Mapping[str, str] | None = None,
-                       xacro_args: Mapping[str, str] | None = None, name: str | None = None
-                       ) -> ImportResult:
+                       xacro_args: Mapping[str, str] | None = None, name: str | None = None,
+                       packages: Mapping[str, str | Path] | None = None,
+                       environ: Mapping[str, str] | None = None) -> ImportResult:
     """Import the chain ``base`` -> ``tip`` of a URDF or xacro file as a DH table.
 
-    ``base`` defaults to the root link, ``tip`` to the single leaf (URDFError listing the leaves
-    when there are several). ``units``: the table file's {"length": "m"|"mm", "angle":
-    "deg"|"rad"} (default m and deg). Raises URDFError for a description that cannot be read or
-    has a floating, planar or mimic joint on the chain, and DHError when the written table would
+    ``base`` defaults to the root link, ``tip`` to the single leaf (ROS-Industrial's ``base``
+    frame not counted), or to ``tool0`` among several leaves (the ROS-Industrial tip;
+    URDFError listing the leaves otherwise). ``units``:
+    the table file's {"length": "m"|"mm", "angle": "deg"|"rad"} (default m and deg).
+    ``xacro_args``, ``packages`` ({NAME: folder} for ``$(find NAME)``) and ``environ``: see
+    :func:`dhkin.description.read_description`. Raises URDFError naming the file (and the joint
+    and its line) for a description that cannot be read, has a floating, planar or mimic joint
+    on the chain, or a value a table cannot hold, and DHError when the written table would
     deviate from the description by more than DEFAULT_TOLERANCE (a bug: the construction is
     exact).
     """
@@ -134,31 +146,33 @@ def import_description(path: str | Path, base: str | None = None, tip: str | Non
         raise InputError(f"convention: expected one of {list(CONVENTIONS)}, got {convention!r}",
                          field="convention", value=convention, expected=f"one of {CONVENTIONS}")
     units = _check_units(units)
-    description = read_description(path, xacro_args)
+    description = read_description(path, xacro_args, packages, environ)
     base = description.root if base is None else base
     tip = _default_tip(description) if tip is None else tip
     joints, ignored = _chain_joints(description, base, tip)
-    chain = read_chain(description.text, base, tip)
-    chain = replace(chain, source=description.source)
-    if list(chain.joint_names) != [joint.name for joint in joints]:  # Pinocchio and yourdfpy
+    chain = read_chain(description.text, base, tip, source=description.source)
+    if list(chain.joint_names) != [joint.name for joint in joints]:  # Pinocchio and the outline
         raise URDFError(f"{description.source}: Pinocchio reads the chain {base} -> {tip} as "
-                        f"{list(chain.joint_names)}, yourdfpy as {[j.name for j in joints]}; "
+                        f"{list(chain.joint_names)}, the XML as {[j.name for j in joints]}; "
                         "expected the same joints")
-    notes = []
+    links, notes = table_link_names(description.source, joints, tip)
     continuous = [joint.name for joint in joints if joint.type == "continuous"]
     if continuous:
         notes.append(f"continuous joints {continuous} limited to +-360 deg")
     points, axes = chain.axis_lines()
     rows = rows_from_axes(points, axes, chain.revolute, chain.tip, convention, BAND.angle)
-    table = _table(description, chain, joints, rows, convention, name, base, tip)
+    table = _table(description, chain, joints, links, rows, convention, name, base, tip)
     if rows.near_parallel:
         pairs = ", ".join(f"{k + 1}-{k + 2}" for k in rows.near_parallel)
         notes.append(f"axes {pairs} are within the band of parallel but not parallel: nominal "
                      "DH rows with fitted corrections")
         table = _corrected(table, chain)
-    table = _clean(table, units)
+    table = _clean(table, units, _reach(chain))
     table = replace(table, source=_source(description, base, tip, notes))
-    written = read_back(table_to_yaml(table, units), source=description.source)
+    try:
+        written = read_back(table_to_yaml(table, units), source=IMPORTED_TABLE)
+    except DHError as exc:  # lower >= upper, a velocity < 0: named as the description has it
+        raise described_error(exc, description.source, joints) from exc
     deviation = chain_deviation(written, chain, VERIFY_SAMPLES)
     if max(deviation) > DEFAULT_TOLERANCE:
         raise DHError(f"{description.source}: the imported table deviates from the description "
@@ -186,12 +200,17 @@ def _check_units(units: Mapping[str, str] | None) -> dict[str, str]:
 
 
 def _default_tip(description: Description) -> str:
+    """The single leaf link (ROS-Industrial's ``base`` frame, a leaf below base_link, not
+    counted), else tool0 when it is a leaf (ROS-Industrial's tip)."""
     leaves = description.leaves()
-    if len(leaves) != 1:
-        raise URDFError(f"{description.source}: several leaf links {leaves}; expected --tip "
-                        "naming one of them", field="tip", value=None,
-                        expected=f"one of {leaves}")
-    return leaves[0]
+    candidates = [leaf for leaf in leaves if leaf != ROS_INDUSTRIAL_BASE] or leaves
+    if len(candidates) == 1:
+        return candidates[0]
+    if DEFAULT_TIP in candidates:
+        return DEFAULT_TIP
+    raise URDFError(f"{description.source}: several leaf links {leaves} and none is "
+                    f"{DEFAULT_TIP}; expected --tip naming one of them", field="tip", value=None,
+                    expected=f"one of {leaves}")
 
 
 def _chain_joints(description: Description, base: str, tip: str
@@ -231,20 +250,20 @@ def _chain_joints(description: Description, base: str, tip: str
 
 
 def _table(description: Description, chain: URDFChain, joints: list[DescriptionJoint],
-           rows: AxisRows,
-           convention: str, name: str | None, base: str, tip: str) -> DHTable:
+           links: list[str], rows: AxisRows, convention: str, name: str | None, base: str,
+           tip: str) -> DHTable:
     table_joints = []
     for i, joint in enumerate(joints):
         revolute = chain.revolute[i]
         lower, upper = joint.lower, joint.upper
         if joint.type == "continuous" or lower is None or upper is None:
             if joint.type != "continuous":
-                raise URDFError(f"{description.source}: joint {joint.name!r} ({joint.type}) has "
-                                "no lower/upper limit; expected both", field="joint",
+                raise URDFError(f"{description.source}: {joint.label} ({joint.type}) has no "
+                                "lower/upper limit; expected both", field="joint",
                                 value=joint.name, expected="<limit lower=... upper=...>")
             lower, upper = -CONTINUOUS_LIMIT, CONTINUOUS_LIMIT
         table_joints.append(Joint(
-            name=joint.name, link=joint.child, type="revolute" if revolute else "prismatic",
+            name=joint.name, link=links[i], type="revolute" if revolute else "prismatic",
             a=rows.a[i], alpha=rows.alpha[i], d=rows.fixed[i] if revolute else 0.0,
             theta=0.0 if revolute else rows.fixed[i], offset=rows.offset[i],
             direction=rows.direction[i], lower=float(lower), upper=float(upper),
@@ -256,11 +275,14 @@ def _table(description: Description, chain: URDFChain, joints: list[DescriptionJ
     if problem is not None:
         origin = "--name" if name is not None else f"the file name {description.source}"
         raise InputError(f"name (from {origin}): {problem}; give a name with --name",
-                         field="name", value=table_name, expected=NAME_RULE)
-    return DHTable(name=table_name, convention=convention,  # type: ignore[arg-type]
-                   joints=tuple(table_joints), base=rows.frame_0, tool=tool, flange=flange,
-                   description=f"{description.robot_name}, imported from "
-                               f"{Path(description.source).name} ({base} -> {tip})")
+                         field="name", value=table_name, expected=ROBOT_NAME_RULE)
+    try:
+        return DHTable(name=table_name, convention=convention,  # type: ignore[arg-type]
+                       joints=tuple(table_joints), base=rows.frame_0, tool=tool, flange=flange,
+                       description=f"{description.robot_name}, imported from "
+                                   f"{Path(description.source).name} ({base} -> {tip})")
+    except DHError as exc:  # a value a table cannot hold: named as the description has it
+        raise described_error(exc, description.source, joints) from exc
 
 
 def _flange(description: Description, base: str, tip: str, frame_n: NDArray[np.float64],
@@ -296,40 +318,50 @@ def _corrected(table: DHTable, chain: URDFChain) -> DHTable:
     return fit_to_chain(ideal_model(first), chain)
 
 
-def _clean(table: DHTable, units: Mapping[str, str]) -> DHTable:
+def _clean(table: DHTable, units: Mapping[str, str], reach: float) -> DHTable:
     """Every DH value, correction, base, tool and flange component as the shortest decimal in
-    ``units`` within CLEAN of it (limits, velocities and efforts untouched)."""
+    ``units`` within CLEAN of it: CLEAN metres for a length, CLEAN / ``reach`` radians for an
+    angle (``reach``: the chain's extent in metres, at least 1), so that no rounding moves a
+    point of the arm by more than CLEAN (a 300 m chain's angles rounded to 1e-12 rad would move
+    its tip by 3e-10 m each). Limits, velocities and efforts are untouched."""
     length, angle = units["length"], units["angle"]
+
+    def clean(value: float, unit: str) -> float:
+        return _shortest(value, unit, CLEAN / reach if unit in ANGLE_UNITS else CLEAN)
 
     def clean_joint(joint: Joint) -> Joint:
         variable = angle if joint.is_revolute else length
-        correction = tuple(_shortest(v, length if k < 3 else angle)
+        correction = tuple(clean(v, length if k < 3 else angle)
                            for k, v in enumerate(joint.correction))
-        return replace(joint, a=_shortest(joint.a, length), alpha=_shortest(joint.alpha, angle),
-                       d=_shortest(joint.d, length), theta=_shortest(joint.theta, angle),
-                       offset=_shortest(joint.offset, variable),
+        return replace(joint, a=clean(joint.a, length), alpha=clean(joint.alpha, angle),
+                       d=clean(joint.d, length), theta=clean(joint.theta, angle),
+                       offset=clean(joint.offset, variable),
                        correction=correction)  # type: ignore[arg-type]
 
+    def clean_frame(T: NDArray[np.float64]) -> NDArray[np.float64]:
+        xyz = [clean(float(v), length) for v in T[:3, 3]]
+        rpy = [clean(v, angle) for v in exact_rpy(T)]
+        return xyz_rpy_to_matrix(xyz, rpy)
+
     return replace(table, joints=tuple(clean_joint(j) for j in table.joints),
-                   base=_clean_frame(table.base, length, angle),
-                   tool=_clean_frame(table.tool, length, angle),
-                   flange=_clean_frame(table.flange, length, angle))
+                   base=clean_frame(table.base), tool=clean_frame(table.tool),
+                   flange=clean_frame(table.flange))
 
 
-def _clean_frame(T: NDArray[np.float64], length: str, angle: str) -> NDArray[np.float64]:
-    xyz = [_shortest(float(v), length) for v in T[:3, 3]]
-    rpy = [_shortest(v, angle) for v in exact_rpy(T)]
-    return xyz_rpy_to_matrix(xyz, rpy)
+def _reach(chain: URDFChain) -> float:
+    """The chain's extent (m, at least 1): the farthest joint axis point or tip from the base."""
+    points = np.vstack([chain.frames[:, :3, 3], chain.tip[None, :3, 3]])
+    return max(1.0, float(np.linalg.norm(points, axis=1).max()))
 
 
-def _shortest(value: float, unit: str) -> float:
-    """The SI value of the shortest decimal in ``unit`` (m, mm, rad or deg) within CLEAN of
-    ``value`` (SI), converted as :func:`dhkin.load_table` converts it."""
+def _shortest(value: float, unit: str, limit: float) -> float:
+    """The SI value of the shortest decimal in ``unit`` (m, mm, rad or deg) within ``limit``
+    (SI) of ``value`` (SI), converted as :func:`dhkin.load_table` converts it."""
     scale = LENGTH_UNITS[unit] if unit in LENGTH_UNITS else ANGLE_UNITS[unit]
     in_unit = value / scale
     for digits in range(18):
         back = round(in_unit, digits) * scale
-        if abs(back - value) <= CLEAN:
+        if abs(back - value) <= limit:
             return float(back)
     return value
 

@@ -63,6 +63,7 @@ from dhkin.ik.geometry import (
     table_scale,
     type_conditions,
 )
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert
 
 #: Largest difference (matrix entries: metres and rotation entries) allowed between the table's
@@ -72,6 +73,14 @@ TOLERANCE = 1e-12
 #: decimal, angles within SNAP (rad) of a multiple of pi/2 and rotation entries within SNAP of 0
 #: or +-1 are set onto those values; the FK check runs on the values so set.
 SNAP = 1e-14
+#: Fixed frames (base_link -> OPW base, OPW flange -> tool0) within this (m, rad) of the
+#: identity are left out of the file MoveIt reads (dhkin.opw_yaml, "The plain form"): the
+#: verification tolerance for positions; for rotations 1e-6 rad, which holds the rounding of an
+#: rpy written with six decimals (each angle within 5e-7 rad, the three together within
+#: sqrt(3) x 5e-7 = 8.7e-7 rad), a micrometre at a metre from the flange. A tool0 whose z axis
+#: lies within the rotation band of axis 6 has its turn about axis 6 taken into offset 6, so
+#: that only the tilt is left to the band.
+PLAIN_FORM_BAND = (DEFAULT_TOLERANCE, 1e-6)
 #: Random joint vectors (fixed seed) of the FK check, besides the special angles.
 CHECK_SAMPLES = 512
 #: Every combination of these angles (rad) over the six joints is checked too.
@@ -333,13 +342,14 @@ def _wrist(forearm: Matrix, axis5: Vector, axis6: Vector, centre: Vector, tool_o
            tool_rotation: Matrix) -> tuple[float, float, float, int, float]:
     """The ZYZ wrist at q = 0 (coordinates in F; ``forearm``: F -> the frame turned by t2 + t3
     about y): t4, t5, t6, sign 6 and c4. Axis 5 is taken as it points (sign 5 is +1); axis 6
-    along tool0's z when that lies on it (then t6 turns the OPW flange onto tool0), else
-    pointing to tool0 (c4 >= 0, t6 = 0)."""
+    along tool0's z when that lies on it within the rotation band of :data:`PLAIN_FORM_BAND`
+    (then t6 turns the OPW flange onto tool0, up to that tilt), else pointing to tool0
+    (c4 >= 0, t6 = 0)."""
     e5 = forearm.T @ axis5
     t4 = math.atan2(-e5[0], e5[1])
     after_4 = forearm @ _rotation("z", t4)
     tool_z = tool_rotation[:, 2]
-    along_tool_z = abs_sin(tool_z, axis6) <= SNAP
+    along_tool_z = abs_sin(tool_z, axis6) <= PLAIN_FORM_BAND[1]
     if along_tool_z:
         sign6 = _sign(float(np.dot(tool_z, axis6)))
     else:

@@ -78,7 +78,7 @@ def stated_velocity(value: float) -> float | None:
 class Manipulability:
     """Manipulability measures of a 6xn Jacobian (in LOCAL_WORLD_ALIGNED at the frame origin).
 
-    ``yoshikawa`` = sqrt(det(J J^T)) (= |det J| for a square J); ``translational`` and
+    ``yoshikawa`` = sqrt(det(J J^T)) (= ``|det J|`` for a square J); ``translational`` and
     ``rotational`` use the linear (rows 0-2) and angular (rows 3-5) blocks. ``singular_values`` are
     sorted descending; ``condition`` = sigma_max / sigma_min (inf at a singularity). Linear rows
     are in m/rad (m per unit joint value) and angular rows in rad/rad, so the singular values mix

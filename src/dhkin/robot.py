@@ -10,9 +10,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin import memory
 from dhkin.builtin import builtin_dir, builtin_names, resolve_table_path
 from dhkin.dh import DHTable
-from dhkin.errors import FamilyError
+from dhkin.errors import FamilyError, InputError
 from dhkin.ik.result import IKBatch, IKSolutions
 from dhkin.ik.solver import DEFAULT_CHUNK, DEFAULT_TOLERANCE, ClosedFormSolver
 from dhkin.reference import Reference
@@ -23,6 +24,12 @@ if TYPE_CHECKING:
     from dhkin.ik.general6r import General6RSolver
     from dhkin.ik.numerical import NumericalIK
     from dhkin.singularity import SingularityReport, Thresholds
+
+def batch_bytes_per_solution(dof: int) -> int:
+    """Bytes of one solution of a batch result: q (8 per joint), the residuals (16), valid,
+    flags (1 each) and branch (2)."""
+    return 8 * dof + 20
+
 
 #: Re-exported: the built-in robots (dhkin.builtin).
 __all__ = ["Robot", "builtin_dir", "builtin_names", "load", "resolve_table_path"]
@@ -208,12 +215,49 @@ class Robot:
         batch = self.ik_batch_detailed(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
         return batch.q, batch.valid
 
+    def batch_memory(self, n_poses: int) -> int:
+        """Bytes :meth:`ik_batch` with ``copies=True`` may need for ``n_poses`` poses of the
+        closed-form family (0 without one): the result at its widest, n_poses x the most
+        solutions one pose can have x :func:`batch_bytes_per_solution`, twice (each chunk's
+        result is made on its own and the chunks are joined at the end). The most solutions:
+        the solver's ``max_solutions``, capped by what the limits allow, every branch times,
+        per revolute joint, floor(span / 2 pi) + 1 copies (the most 2 pi copies of one angle a
+        closed interval of that span holds)."""
+        solver = self._closed_form_solver
+        if solver is None:
+            return 0
+        spans = self.table.upper - self.table.lower
+        revolute = np.array([joint.is_revolute for joint in self.table.joints])
+        copies = np.where(revolute, np.floor(spans / (2.0 * np.pi)) + 1, 1)
+        widest = min(solver.max_solutions, len(solver.branch_labels) * int(np.prod(copies)))
+        return 2 * int(n_poses) * widest * batch_bytes_per_solution(self.dof)
+
+    def _check_batch_memory(self, T: ArrayLike, copies: bool) -> None:
+        """With every copy, size the batch before it is allocated: InputError naming the bytes
+        (:meth:`batch_memory`) and :meth:`ik_batch_chunks` when they exceed
+        :func:`dhkin.memory.available_memory`."""
+        if copies is not True or self._closed_form_solver is None:
+            return
+        poses = int(np.prod(np.shape(T)[:-2])) if np.ndim(T) >= 2 else 1
+        needed = self.batch_memory(poses)
+        available = memory.available_memory()
+        if available is not None and needed > available:
+            raise InputError(
+                f"T: ik_batch with copies=True of {poses} poses may need {needed / 1e9:.3g} GB "
+                f"(robot.batch_memory), more than the {available / 1e9:.3g} GB available; "
+                "expected fewer poses, or robot.ik_batch_chunks(T, copies=True), which yields "
+                "the result chunk by chunk", field="T", value=poses,
+                expected="a batch that fits in memory")
+
     def ik_batch_detailed(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                           tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
                           copies: bool = False, chunk_size: int = DEFAULT_CHUNK,
                           workers: int | None = None) -> IKBatch:
         """Like :meth:`ik_batch`, with flags, branch indices, residuals and projections (the
-        closed-form family, else the general 6R solver; FamilyError for neither)."""
+        closed-form family, else the general 6R solver; FamilyError for neither). With
+        ``copies=True`` a batch too large for the memory available is an InputError naming
+        its size and :meth:`ik_batch_chunks`, before anything is allocated."""
+        self._check_batch_memory(T, copies)
         general = self.general_solver
         if self._closed_form_solver is None and general is not None:
             return general.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
@@ -235,7 +279,7 @@ class Robot:
         """Singularity report of q (URDF joint values, rad and m).
 
         ``kinds``: the singularities q is at or near (subset of "wrist", "elbow", "shoulder");
-        ``distances`` (|sin q5|, metres); the analytic det J factored into shoulder x elbow x
+        ``distances`` (``|sin q5|``, metres); the analytic det J factored into shoulder x elbow x
         wrist terms; Pinocchio's ``sigma_min``, singular values, Yoshikawa measures and
         condition. ``thresholds`` default to dhkin.singularity.DEFAULT_THRESHOLDS, or override
         some kinds: {"wrist": 1e-3}. FamilyError outside the closed-form families. See

@@ -12,7 +12,7 @@ from typing import Any, NamedTuple
 from dhkin.dh import ANGLE_UNITS, LENGTH_UNITS, MAX_JOINT_TURNS, MAX_LENGTH
 from dhkin.errors import DHError
 from dhkin.table_yaml import field_key, shown
-from dhkin.xml_text import NAME_RULE, name_problem, text_problem
+from dhkin.xml_text import NAME_RULE, ROBOT_NAME_RULE, name_problem, text_problem
 
 #: Slack of the range checks against the rounding of unit conversion (720 deg -> 4 pi rad).
 _SLACK = 1e-9
@@ -113,7 +113,8 @@ def name_value(value: Any, where: Where, field_name: str, macro: bool = False) -
     also names the xacro macro and so may not be one of xacro's directives."""
     problem = name_problem(value, macro=macro)
     if problem is not None:
-        raise where.error(field_name, value, NAME_RULE, bounded(problem, value))
+        raise where.error(field_name, value, ROBOT_NAME_RULE if macro else NAME_RULE,
+                          bounded(problem, value))
     return str(value)
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-#: Below this |cos(pitch)| a rotation is treated as gimbal-locked when converted to rpy.
+#: Below this ``|cos(pitch)|`` a rotation is treated as gimbal-locked when converted to rpy.
 GIMBAL_LOCK_TOLERANCE = 1e-12
 
 
@@ -50,8 +50,8 @@ def xyz_rpy_to_matrix(xyz: ArrayLike, rpy: ArrayLike) -> NDArray[np.float64]:
 def matrix_to_rpy(R: ArrayLike) -> tuple[float, float, float]:
     """Rotation matrix (3x3 or the block of a 4x4) -> URDF (roll, pitch, yaw) in rad.
 
-    At gimbal lock (|cos pitch| < ``GIMBAL_LOCK_TOLERANCE``) roll absorbs the whole rotation about
-    the locked axis and yaw is 0.
+    At gimbal lock (``|cos pitch|`` < ``GIMBAL_LOCK_TOLERANCE``) roll absorbs the whole rotation
+    about the locked axis and yaw is 0.
     """
     M = np.asarray(R, dtype=float)[:3, :3]
     cos_pitch = float(np.hypot(M[0, 0], M[1, 0]))

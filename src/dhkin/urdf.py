@@ -14,7 +14,7 @@ Each URDF joint origin is built from the parts of two consecutive DH rows that d
 the joint variable; see :func:`joint_origins`.
 
 Text: names (robot, joints, links, ``prefix``) are written as they are and must follow
-:data:`dhkin.xml_text.NAME_RULE` (checked on load, and again here for tables made in Python).
+:mod:`dhkin.xml_text`'s rules (checked on load, and again here for tables made in Python).
 Each of the three files starts with a banner comment, then one comment per non-empty free-text
 field of the table, ``<!-- description: ... -->`` and ``<!-- source: ... -->``, outside the
 ``<robot>`` element, where xacro does not look; the text is escaped as
@@ -48,7 +48,15 @@ from dhkin.transforms import (
     translation,
     xyz_rpy_to_matrix,
 )
-from dhkin.xml_text import NAME_RULE, comment_body, name_problem, text_problem
+from dhkin.xacro_expansion import XACRO_LOCK
+from dhkin.xml_text import (
+    NAME_RULE,
+    ROBOT_NAME_RULE,
+    comment_body,
+    name_problem,
+    prefix_problem,
+    text_problem,
+)
 
 #: Values below this (m or rad) are written as 0 in generated files (they come from cos(pi/2)).
 ZERO_SNAP = 1e-15
@@ -223,7 +231,7 @@ def check_text(table: DHTable) -> None:
     which the table loader applies too; a table made in Python has not been through it)."""
     label = table_label(table)
     checks: list[tuple[str, object, str | None, str]] = [
-        ("name", table.name, name_problem(table.name, macro=True), NAME_RULE)]
+        ("name", table.name, name_problem(table.name, macro=True), ROBOT_NAME_RULE)]
     for i, joint in enumerate(table.joints):
         checks += [(f"joints[{i}].{key}", value, name_problem(value), NAME_RULE)
                    for key, value in (("name", joint.name), ("link", joint.link))]
@@ -264,7 +272,8 @@ def expand_xacro(top_file: Path, prefix: str = "", *, notes: Sequence[tuple[str,
     ``top_file`` is left out of xacro's own message then, so a temporary folder is never named.
     """
     try:
-        document = xacro.process_file(str(top_file), mappings={"prefix": prefix})
+        with XACRO_LOCK:  # xacro keeps its state in module globals
+            document = xacro.process_file(str(top_file), mappings={"prefix": prefix})
     except Exception as exc:  # xacro raises its own XacroException and plain errors alike
         if label is None:
             raise URDFError(f"{top_file}: xacro failed: {exc}") from exc
@@ -289,13 +298,14 @@ def generate(table: DHTable, prefix: str = "") -> GeneratedFiles:
     """Generate the macro, the top-level xacro and the URDF (expanded by xacro) for ``table``.
 
     Raises :class:`DHError` for a name or text of the table that the files cannot hold (see
-    :func:`check_text`), :class:`InputError` for a ``prefix`` that is not empty nor a name
-    (:data:`dhkin.xml_text.NAME_RULE`), :class:`URDFError` naming the table if xacro fails.
+    :func:`check_text`), :class:`InputError` for a ``prefix`` that does not make names of the
+    names it goes before (:func:`dhkin.xml_text.prefix_problem`: ``left_``, ``arm1/``),
+    :class:`URDFError` naming the table if xacro fails.
     """
     check_text(table)
-    if prefix != "" and (problem := name_problem(prefix)) is not None:
-        raise InputError(f"prefix: {problem} (or empty)", field="prefix", value=prefix,
-                         expected=f"'' or {NAME_RULE}")
+    if (problem := prefix_problem(prefix)) is not None:
+        raise InputError(f"prefix: {problem}", field="prefix", value=prefix,
+                         expected=f"'' or text that makes names ({NAME_RULE})")
     macro, top = macro_xacro(table), top_xacro(table)
     names = (f"{table.name}_macro.xacro", f"{table.name}.urdf.xacro", f"{table.name}.urdf")
     try:

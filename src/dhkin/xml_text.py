@@ -3,13 +3,16 @@ free text XML can hold, and how free text is written into comments.
 
 **Names** (robot, joints, links, the ``prefix`` of :func:`dhkin.urdf.generate`) are written into
 XML attributes that xacro evaluates, and the robot name also becomes the xacro macro's name (an
-element name, ``<xacro:NAME .../>``) and part of file names. A name is therefore restricted to
-``[A-Za-z_][A-Za-z0-9_-]*`` (ASCII letters, digits, '_' and '-', starting with a letter or '_'):
+element name, ``<xacro:NAME .../>``) and part of file names. A robot name is therefore restricted
+to ``[A-Za-z_][A-Za-z0-9_-]*`` (ASCII letters, digits, '_' and '-', starting with a letter or '_'):
 a valid XML name, a valid ROS frame name apart from the '-', nothing xacro reads as an expression
 (``${...}``, ``$(...)``), nothing that needs escaping and nothing a shell or a file system
-misreads. The robot name may in addition not be one of xacro's own directives
-(:data:`XACRO_DIRECTIVES`: ``<xacro:include .../>`` would not call a macro named "include").
-Anything else is rejected, never altered.
+misreads; nor may it be one of xacro's own directives (:data:`XACRO_DIRECTIVES`:
+``<xacro:include .../>`` would not call a macro named "include"). A joint or link name (only ever
+an attribute value) may in addition join such names with single '/' characters, as ROS
+namespaces do (``wx250s/gripper_link``; not first, not last, not doubled), and is written as it
+is in both directions: import keeps it, export writes it. Anything else is rejected, never
+altered.
 
 **Free text** (a table's description and source, the table's file name) is kept exactly, in
 XML comments, which neither XML nor xacro interprets, so ``<``, ``&``, ``]]>``, quotes,
@@ -34,11 +37,17 @@ import re
 
 from dhkin.errors import InputError
 
-#: A name: ASCII letters, digits, '_' and '-', starting with a letter or '_' (see the module doc).
+#: A robot name: ASCII letters, digits, '_' and '-', starting with a letter or '_' (module doc).
 NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*")
+#: A joint or link name: robot-name parts joined by single '/' (ROS namespaces; module doc).
+FRAME_NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*(?:/[A-Za-z_][A-Za-z0-9_\-]*)*")
 
-#: The name rule in words, for error messages.
-NAME_RULE = "a name of letters, digits, '_' or '-' starting with a letter or '_' (ASCII only)"
+#: The robot name rule in words, for error messages.
+ROBOT_NAME_RULE = ("a name of letters, digits, '_' or '-' starting with a letter or '_' "
+                   "(ASCII only)")
+#: The joint and link name rule in words, for error messages.
+NAME_RULE = ("a name of letters, digits, '_' or '-' starting with a letter or '_' (ASCII only), "
+             "or such names joined by '/'")
 
 #: xacro's directives (``<xacro:NAME>``): a robot name, which becomes the macro's name, may not
 #: be one of them.
@@ -52,15 +61,29 @@ _ESCAPED = re.compile(r"\\|(?<=-)-|(?<=xacro):")
 
 
 def name_problem(value: object, *, macro: bool = False) -> str | None:
-    """What is wrong with ``value`` as a name (``"expected ..., got ..."``), or None if it is one.
+    """What is wrong with ``value`` as a joint or link name (``"expected ..., got ..."``), or
+    None if it is one.
 
-    ``macro=True`` also rejects xacro's directives (the robot name becomes the macro's name).
+    ``macro=True``: as a robot name (no '/', and not one of xacro's directives: the robot name
+    becomes the macro's name).
     """
-    if not isinstance(value, str) or NAME_PATTERN.fullmatch(value) is None:
-        return f"expected {NAME_RULE}, got {value!r}"
+    pattern, rule = (NAME_PATTERN, ROBOT_NAME_RULE) if macro else (FRAME_NAME_PATTERN, NAME_RULE)
+    if not isinstance(value, str) or pattern.fullmatch(value) is None:
+        return f"expected {rule}, got {value!r}"
     if macro and value in XACRO_DIRECTIVES:
         return (f"expected a name other than xacro's directives {list(XACRO_DIRECTIVES)} "
                 f"(it names the xacro macro), got {value!r}")
+    return None
+
+
+def prefix_problem(value: object) -> str | None:
+    """What is wrong with ``value`` as the ``prefix`` of every joint and link name, or None: the
+    empty string, or text that makes a name of any name it is put before (``left_``, ``arm1/``).
+    """
+    if value == "":
+        return None
+    if not isinstance(value, str) or FRAME_NAME_PATTERN.fullmatch(value + "x") is None:
+        return f"expected '' or text that makes names of names ({NAME_RULE}), got {value!r}"
     return None
 
 

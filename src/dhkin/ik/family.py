@@ -17,7 +17,7 @@ origin by up to millimetres and milliradians. A family is therefore chosen withi
    verified there (:mod:`dhkin.ik.compiled.pipeline`).
 
 The band is physical: :data:`BAND` = 0.02 rad (1.15 degrees) and 2 mm. It is ten times the
-largest structural deviation of the real calibrated UR5e of ``../shared/reference`` (see
+largest structural deviation of the real calibrated UR5e of ``robots/vendor`` (see
 docs/ik_core.md for the measured figures), wide enough for every rounded vendor constant (1e-7 to
 7e-6 rad), and narrow enough that Newton's method started from the ideal model's solutions
 converges to the exact chain's (the tests solve tables at several times the calibrated

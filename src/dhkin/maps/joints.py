@@ -1,4 +1,4 @@
-"""Joint-space slices: |det J| over a grid of two joints with the others held, and the cells its
+"""Joint-space slices: ``|det J|`` over a grid of two joints with the others held, and the cells its
 factors change sign in (the singular loci).
 """
 
@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class JointSlice:
-    """|det J| over two joints (1-based ``joints``), the others at ``q_fixed``.
+    """``|det J|`` over two joints (1-based ``joints``), the others at ``q_fixed``.
 
     Grids have shape (len(v), len(u)); ``u`` holds joint ``joints[0]``'s values, ``v`` joint
     ``joints[1]``'s (rad, or m for a prismatic joint). ``signed[kind]`` is the kind's signed
@@ -58,7 +58,7 @@ def default_fixed_q(robot: Arm) -> Array:
 
 def joint_slice(robot: Arm, joints: tuple[int, int] = (2, 3), q_fixed: ArrayLike | None = None,
                 resolution: int = DEFAULT_JOINT_RESOLUTION) -> JointSlice:
-    """|det J| and singular loci on a grid of two joints over their limits (one turn, centred
+    """``|det J|`` and singular loci on a grid of two joints over their limits (one turn, centred
     on 0, for a joint whose limits span more), the others at ``q_fixed`` (default:
     :func:`default_fixed_q`)."""
     _check_resolution(resolution)

@@ -1,17 +1,17 @@
 """Manipulability maps with singular loci: a workspace slice and joint-space slices, as PNG.
 
-The measure drawn is the Yoshikawa manipulability sqrt(det(J J^T)) = |det J| (m^3: three
+The measure drawn is the Yoshikawa manipulability sqrt(det(J J^T)) = ``|det J|`` (m^3: three
 columns' linear parts carry metres) of the 6x6 Jacobian, computed from the analytic factorization
 of :mod:`dhkin.singularity` (equal to Pinocchio's det J to 1e-9 relative, see the tests).
 
 **Workspace slice**: tool0 positions on a plane of base_link ("xz": y = offset, "yz": x = offset,
 "xy": z = offset) at one fixed tool0 orientation (URDF rpy). Each cell is solved by the
-closed-form IK; the cell's value is the best |det J| over the distinct IK branches that have a
+closed-form IK; the cell's value is the best ``|det J|`` over the distinct IK branches that have a
 copy within the joint limits (2pi copies have the same kinematics), NaN (blank) when none has.
 Singular loci, per kind:
 
 * inside the reachable region, a cell is on a locus when, along x or along z, one IK branch's
-  signed factor changes sign towards a neighbour, or its distance (|factor|) has a V-shaped
+  signed factor changes sign towards a neighbour, or its distance (``|factor|``) has a V-shaped
   minimum there (``d_i <= min(d_left, d_right)`` and ``d_i <= (d_left + d_right) / 4``: true
   when the zero lies within the cell; a smooth minimum passes only if it dips within the
   curvature of one cell), or, where the branch ends at the cell because two branches merge at
@@ -26,7 +26,7 @@ Singular loci, per kind:
   locus running inside a boundary cell (where the interior test lacks a neighbour) is found on
   a finely sampled segment through the cell to the boundary point.
 
-**Joint-space slices**: two joints varied over their limits, the others fixed; |det J| on the
+**Joint-space slices**: two joints varied over their limits, the others fixed; ``|det J|`` on the
 grid, and the zero sets of the signed factors (exact curves: the factors are smooth in q), the
 cells through which they pass marked as loci.
 """
@@ -75,14 +75,15 @@ SEGMENT_SAMPLES = 17
 
 @dataclass(frozen=True)
 class WorkspaceSlice:
-    """Best |det J| over IK branches on a plane of tool0 positions at a fixed orientation.
+    """Best ``|det J|`` over IK branches on a plane of tool0 positions at a fixed orientation.
 
     Grids have shape (len(v), len(u)) (row = v, column = u). ``u``/``v`` are the in-plane
     base_link coordinates (m) named by ``plane`` ("xz": u = x, v = z); ``offset`` the third
-    coordinate. ``manipulability``: best |det J| (m^3), NaN where unreachable; ``solutions``: number
-    of IK branches within the limits; ``distances[kind]``: smallest distance over the branches
-    (units of :data:`dhkin.singularity.DISTANCE_UNITS`); ``loci[kind]``: cells a singular locus of
-    that kind passes through; ``boundary``: reachable cells next to an unreachable one.
+    coordinate. ``manipulability``: best ``|det J|`` (m^3), NaN where unreachable;
+    ``solutions``: number of IK branches within the limits; ``distances[kind]``: smallest
+    distance over the branches (units of :data:`dhkin.singularity.DISTANCE_UNITS`);
+    ``loci[kind]``: cells a singular locus of that kind passes through; ``boundary``: reachable
+    cells next to an unreachable one.
     """
 
     robot: str
@@ -151,7 +152,7 @@ def workspace_slice(robot: Arm, plane: str = "xz", offset: float = 0.0,
                     extent: tuple[tuple[float, float], tuple[float, float]] | None = None,
                     resolution: int = DEFAULT_RESOLUTION, progress: bool = False
                     ) -> WorkspaceSlice:
-    """Best |det J| over the IK branches on a ``resolution`` x ``resolution`` grid of a plane.
+    """Best ``|det J|`` over the IK branches on a ``resolution`` x ``resolution`` grid of a plane.
 
     ``plane`` "xz" | "yz" | "xy" of base_link at ``offset`` (m) along the third axis; tool0's
     orientation is URDF ``rpy`` (rad) in base_link (default: :data:`DEFAULT_RPY` of the family);
@@ -245,7 +246,7 @@ def _locus_cells(signed: Array, distance: Array) -> Mask:
 
     Along rows and along columns, a cell is marked when one branch b valid there
 
-    * changes the sign of its factor towards a neighbour (the cell with the smaller |factor|),
+    * changes the sign of its factor towards a neighbour (the cell with the smaller ``|factor|``),
     * or has a V-shaped minimum of its distance, valid on both sides:
       ``d <= min(d_left, d_right)`` and ``d <= (d_left + d_right) / 4``,
     * or is valid on one side only, whose straight-line extrapolation reaches zero within half a

@@ -30,7 +30,7 @@ class SingularityReport:
     factors["wrist"]`` (analytic); ``determinant_pinocchio`` is det J from Pinocchio. From
     Pinocchio (LOCAL_WORLD_ALIGNED Jacobian at tool0): ``singular_values`` (descending),
     ``sigma_min``, ``condition`` (sigma_max / sigma_min) and the Yoshikawa ``manipulability``
-    (whole = |det J|), ``translational`` and ``rotational`` (linear / angular rows).
+    (whole = ``|det J|``), ``translational`` and ``rotational`` (linear / angular rows).
     """
 
     robot: str

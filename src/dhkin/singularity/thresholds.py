@@ -32,7 +32,7 @@ Array = NDArray[np.float64]
 class Thresholds:
     """Distances at or below which a configuration counts as at or near each singularity.
 
-    ``wrist`` is dimensionless (|sin q5|), ``elbow`` and ``shoulder`` are metres; see the module
+    ``wrist`` is dimensionless (``|sin q5|``), ``elbow`` and ``shoulder`` are metres; see the module
     docstring for what each distance measures.
     """
 

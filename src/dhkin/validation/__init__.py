@@ -24,6 +24,7 @@ from dhkin.validation.calls import (
     IKCaller,
 )
 from dhkin.validation.failure_file import FailureFile, read_failure_file
+from dhkin.validation.matching import SINGULAR_FAMILY_FIXED_JOINTS, WRIST_SINGULAR
 from dhkin.validation.references import (
     REFERENCE_KINDS,
     ROUNDED_DIGITS,
@@ -47,8 +48,6 @@ from dhkin.validation.rerun import replay
 from dhkin.validation.run import (
     DEFAULT_JOINT_TOLERANCE,
     POSE_ROUNDING,
-    SINGULAR_FAMILY_FIXED_JOINTS,
-    WRIST_SINGULAR,
     _resolvable,
     validate,
 )

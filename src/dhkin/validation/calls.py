@@ -151,6 +151,10 @@ def collect(result: Any, dof: int, limit: int = MAX_SOLUTIONS_PER_CALL) -> CallR
     """Read what an IK returned, lazily, into a :class:`CallResult` (see the module docstring).
     Exceptions raised while iterating (a generator's body) propagate to the caller's guard."""
     expected = f"expected an iterable of joint vectors ({dof} numbers each)"
+    if (isinstance(result, np.ndarray) and result.ndim == 2 and result.shape[1] == dof
+            and result.dtype.kind in "iuf" and len(result) <= limit):
+        # The common answer, a (k, dof) real array: the checks below, done for all rows at once.
+        return CallResult(list(np.array(result, dtype=float, copy=True)))
     try:
         items = _items(result, dof)
     except TypeError as exc:
@@ -251,9 +255,11 @@ def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray
 
 def _child_main(connection: Any, ik: Any, robot: Arm, limit: int) -> None:
     """The isolated child: say it is ready, then answer (T, q_seed) requests until told to stop
-    (None). Python's fault handler is off here: a crash is the parent's to report, as a failure
-    of the pose, not a stack dump on the terminal."""
+    (None). Python's fault handler is off here, and Ctrl-C ignored: a crash is the parent's to
+    report, as a failure of the pose, and an interrupt the parent's, not a stack dump on the
+    terminal."""
     faulthandler.disable()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to report, once
     declared = wanted(ik)
     connection.send(_READY)
     while True:

@@ -15,11 +15,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dhkin.arm import Arm
+from dhkin.description import read_urdf_file
 from dhkin.errors import InputError, URDFError
 from dhkin.reference import Reference
 from dhkin.transforms import invert
 from dhkin.validation.arguments import quoted
-from dhkin.vendors import VENDOR_REFERENCES
+from dhkin.vendors import VENDOR_REFERENCES, shipped_reference
 
 #: Significant digits of the default "rounded" reference (see :func:`rounded_urdf`).
 ROUNDED_DIGITS = 10
@@ -27,6 +28,10 @@ ROUNDED_DIGITS = 10
 
 #: Names of the built-in reference descriptions (anything else is a URDF path).
 REFERENCE_KINDS: tuple[str, ...] = ("rounded", "exact")
+
+
+#: The name of the robot's vendor URDF shipped with dhkin (:func:`dhkin.vendors.vendor_file`).
+SHIPPED_VENDOR = "vendor"
 
 
 _ROUNDED_ELEMENT = re.compile(r"<(?:origin|axis|limit)\b[^>]*>")
@@ -122,10 +127,10 @@ class ReferenceSpec:
 
 def resolve_reference(robot: Arm, reference: str | Path | ReferenceSpec | None = None,
                       base: str | None = None, tip: str | None = None) -> ReferenceSpec:
-    """``reference`` ("rounded", the default; "exact"; a vendor URDF path; or a ReferenceSpec)
-    with the vendor frames ``base`` / ``tip`` -> a :class:`ReferenceSpec`. A vendor file's frames
-    default to :data:`~dhkin.vendors.VENDOR_REFERENCES` for a robot listed there, else
-    base_link / tool0."""
+    """``reference`` ("rounded", the default; "exact"; "vendor", the robot's vendor URDF shipped
+    with dhkin; a vendor URDF path; or a ReferenceSpec) with the vendor frames ``base`` /
+    ``tip`` -> a :class:`ReferenceSpec`. A vendor file's frames default to
+    :data:`~dhkin.vendors.VENDOR_REFERENCES` for a robot listed there, else base_link / tool0."""
     if isinstance(reference, ReferenceSpec):
         spec = reference
     elif reference is None or (isinstance(reference, str) and reference in REFERENCE_KINDS):
@@ -135,10 +140,13 @@ def resolve_reference(robot: Arm, reference: str | Path | ReferenceSpec | None =
         return ReferenceSpec(kind=str(reference or "rounded"))
     else:
         path = Path(reference)
+        if isinstance(reference, str) and reference == SHIPPED_VENDOR:
+            path = shipped_reference(robot.name, "reference (--reference)")[0]
         if not path.is_file():
             raise InputError(f"reference (--reference): {str(path)!r} is not a file; "
-                             f"expected {' or '.join(map(repr, REFERENCE_KINDS))} or "
-                             "the path of a URDF of the same robot", field="reference")
+                             f"expected {', '.join(map(repr, REFERENCE_KINDS))}, "
+                             f"{SHIPPED_VENDOR!r} or the path of a URDF of the same robot",
+                             field="reference")
         listed = VENDOR_REFERENCES.get(robot.name)
         spec = ReferenceSpec(kind="vendor", path=str(path.resolve()),
                              base=listed.base if listed else "base_link",
@@ -175,10 +183,12 @@ class TargetModel:
 
 
 def target_model(robot: Arm, reference: str | Path | ReferenceSpec | None = None,
-                 base: str | None = None, tip: str | None = None) -> TargetModel:
+                 base: str | None = None, tip: str | None = None,
+                 packages: Mapping[str, str | Path] | None = None) -> TargetModel:
     """The Pinocchio model that makes the targets and checks the solutions (see
-    :func:`resolve_reference`). Bad files, frames or chains raise InputError naming
-    the argument."""
+    :func:`resolve_reference`; a xacro reference is expanded, ``packages`` giving the folders
+    of the ROS packages its ``$(find NAME)`` name: :mod:`dhkin.ros_packages`). Bad files,
+    frames or chains raise InputError naming the argument."""
     spec = resolve_reference(robot, reference, base, tip)
     if spec.kind == "exact":
         return TargetModel(spec, robot.reference())
@@ -188,10 +198,9 @@ def target_model(robot: Arm, reference: str | Path | ReferenceSpec | None = None
                                                                      f"(rounded)"))
     path = Path(spec.path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"reference (--reference): cannot read {str(path)!r} "
-                         f"({exc.strerror})", field="reference") from exc
+        text = read_urdf_file(path, packages)
+    except URDFError as exc:
+        raise InputError(f"reference (--reference): {exc}", field="reference") from exc
     try:
         model = Reference(text, tip=spec.tip, base=spec.base, source=str(path))
     except URDFError as exc:

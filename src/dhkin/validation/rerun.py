@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 from dhkin.arm import Arm
@@ -19,8 +20,8 @@ from dhkin.validation.samples import CONTINUITY_SETS, perturbed_seeds
 def replay(robot: Arm, ik: IKCallable, path: str | Path, ik_name: str | None = None,
            reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
            tip: str | None = None, complete_expected: bool | None = None,
-           timeout: float | None = DEFAULT_CALL_TIMEOUT, isolate: bool = False
-           ) -> ValidationReport:
+           timeout: float | None = DEFAULT_CALL_TIMEOUT, isolate: bool = False,
+           packages: Mapping[str, str | Path] | None = None) -> ValidationReport:
     """Rerun the samples of a failure file with ``ik`` and check them again, on the reference
     the file records (files without one: "exact") unless ``reference`` / ``base`` / ``tip``
     say otherwise, with the recorded perturbed seeds. Every value of the file is checked
@@ -33,7 +34,7 @@ def replay(robot: Arm, ik: IKCallable, path: str | Path, ik_name: str | None = N
     recorded = read_failure_file(path, robot)
     if reference is None:
         reference = recorded.reference
-    model = target_model(robot, reference, base, tip)
+    model = target_model(robot, reference, base, tip, packages)
     perturbed = perturbed_seeds(robot, recorded.q, recorded.sets, recorded.seed)
     for k, row in enumerate(recorded.perturbed):
         if row is not None and recorded.sets[k] in CONTINUITY_SETS:

@@ -21,7 +21,8 @@ by the table's own model and the IK under test cannot hide behind another descri
 * ``"rounded"`` (default): the table's generated URDF with every number of its origin, axis and
   limit attributes rounded to :data:`ROUNDED_DIGITS` significant digits (:func:`rounded_urdf`),
   as vendors write them (UR's pi/2 is 1.570796327): about 1e-10 from the exact table;
-* a vendor URDF (a path) with its ``base`` and ``tip`` frames (defaults from
+* a vendor URDF (a path, or ``"vendor"``: the robot's vendor URDF shipped with dhkin,
+  :func:`dhkin.vendors.vendor_file`) with its ``base`` and ``tip`` frames (defaults from
   :data:`dhkin.vendors.VENDOR_REFERENCES` when the robot is listed there, else base_link /
   tool0);
 * ``"exact"``: the generated URDF itself.
@@ -34,11 +35,12 @@ Outcome per sample (one each, the first that applies, in this order):
   length, or outside the joint limits (the solutions of the continuity call below included);
 * ``no_solution``: nothing came back (every target is reachable: it was made from q);
 * ``missing``: solutions came back but none is the sampled q up to in-limit 2pi shifts (joint
-  difference modulo 2pi <= ``joint_tolerance``). At the wrist singularity (|sin q5| <=
-  :data:`WRIST_SINGULAR` in the sampled q) the pose fixes only a one-parameter family; an IK that
-  takes ``q_seed`` gets the sampled q and must return it, while for an IK without ``q_seed`` only
-  the joints every such family keeps (joints 1 and 5) are compared. Near a singularity a pose
-  fixes q only to about (pose uncertainty) / sigma_min(J), so the joint tolerance there is
+  difference modulo 2pi <= ``joint_tolerance``). At the wrist singularity (``|sin q5|`` <=
+  :data:`~dhkin.validation.matching.WRIST_SINGULAR` in the sampled q) the pose fixes only a
+  one-parameter family; an IK that takes ``q_seed`` gets the sampled q and must return it,
+  while for an IK without ``q_seed`` only the joints every such family keeps (joints 1 and 5)
+  are compared. Near a singularity a pose fixes q only to about (pose uncertainty) /
+  sigma_min(J), so the joint tolerance there is
   ``joint_tolerance + max(POSE_ROUNDING, reference deviation, residual) / sigma_min``
   (sigma_min from Pinocchio's Jacobian at the sampled q; residual: the returned solutions'
   largest error on the reference);
@@ -67,7 +69,7 @@ from __future__ import annotations
 import sys
 import time
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -76,71 +78,38 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.arm import Arm
-from dhkin.errors import DhkinError, FamilyError, InputError
+from dhkin.errors import DhkinError, InputError
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 from dhkin.validation import arguments
 from dhkin.validation.adapters import IKCallable, own_ik
 from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, CallResult, IKCaller, takes_seed
+from dhkin.validation.matching import (
+    SINGULAR_FAMILY_FIXED_JOINTS,
+    configuration_labels,
+    nearest_distances,
+    residuals,
+    wrap,
+    wrist_singular,
+)
 from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
 from dhkin.validation.report import OUTCOMES, SampleResult, ValidationReport
 from dhkin.validation.samples import (
     CONTINUITY_DISTANCE,
     SEED_PERTURBATION,
-    WRIST_JOINT,
     perturbed_seeds,
     sample_joint_vectors,
 )
-
-#: |sin q5| at or below which a sample is on the wrist singularity for the missing check.
-WRIST_SINGULAR = 1e-6
-
 
 #: Pose rounding (m and rad) of a target computed in floating point, a few ulps of a 1 m arm:
 #: the joint difference a pose cannot resolve is about POSE_ROUNDING / sigma_min(J).
 POSE_ROUNDING = 1e-14
 
 
-#: Joints (0-based) compared at the wrist singularity for an IK that takes no seed.
-SINGULAR_FAMILY_FIXED_JOINTS = (0, 4)
-
-
-def _wrap(robot: Arm, difference: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Joint differences with revolute joints wrapped to (-pi, pi] (prismatic ones as they are)."""
-    revolute = np.array([j.is_revolute for j in robot.table.joints])
-    return np.where(revolute, np.pi - np.mod(np.pi - difference, 2.0 * np.pi), difference)
-
-
-def _configuration_labels(robot: Arm, targets: NDArray[np.float64],
-                          q: NDArray[np.float64]) -> list[str]:
-    """Configuration of each sampled q according to dhkin's closed-form solver ('' if none)."""
-    try:
-        batch = robot.ik_batch_detailed(targets)
-    except FamilyError:
-        return [""] * q.shape[0]
-    labels = []
-    for k in range(q.shape[0]):
-        candidates = batch.q[k][batch.valid[k]]
-        branches = batch.branch[k][batch.valid[k]]
-        if candidates.shape[0] == 0:
-            labels.append("unlabelled")
-            continue
-        difference = _wrap(robot, candidates - q[k])
-        best = int(np.argmin(np.abs(difference).max(axis=1)))
-        label = batch.branch_labels[branches[best]]
-        labels.append(" ".join(f"{key}={value}" for key, value in label.items()))
-    return labels
-
-
-def _wrist_singular(robot: Arm, q: NDArray[np.float64]) -> bool:
-    return (robot.dof > WRIST_JOINT and robot.table.joints[WRIST_JOINT].is_revolute
-            and abs(np.sin(q[WRIST_JOINT])) <= WRIST_SINGULAR)
-
-
 def _compared_joints(robot: Arm, q_sampled: NDArray[np.float64],
                      seeded: bool) -> NDArray[np.int64]:
     """Joints the missing check compares (all, except at the wrist singularity without seed)."""
-    if _wrist_singular(robot, q_sampled) and not seeded:
+    if wrist_singular(robot, q_sampled) and not seeded:
         return np.array(SINGULAR_FAMILY_FIXED_JOINTS)
     return np.arange(robot.dof)
 
@@ -171,7 +140,7 @@ def _matched(robot: Arm, model: TargetModel, Q: NDArray[np.float64], q: NDArray[
     """Whether some row of Q is q (mod 2pi on ``joints``, widened by :func:`_resolvable` with
     the pose's uncertainty: the reference's deviation, or the residual of the solutions (two
     joint vectors within r of one pose can differ by ~r / sigma_min))."""
-    closest = float(np.abs(_wrap(robot, Q - q)[:, joints]).max(axis=1).min())
+    closest = float(np.abs(wrap(robot, Q - q)[:, joints]).max(axis=1).min())
     noise = max(POSE_ROUNDING, model.deviation, residual)
     found = closest <= joint_tolerance or closest <= _resolvable(robot, q, joint_tolerance, noise)
     return found, closest
@@ -182,8 +151,9 @@ def _verify(robot: Arm, model: TargetModel, T: NDArray[np.float64],
             ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], str]:
     """Finite solutions, their residuals on the reference, and what is wrong with them ('')."""
     dof = robot.dof
-    good = [s for s in returned if s.shape == (dof,) and np.all(np.isfinite(s))]
-    Q = np.array(good, dtype=float).reshape(len(good), dof)
+    shaped = [s for s in returned if s.shape == (dof,)]
+    Q = np.array(shaped, dtype=float).reshape(len(shaped), dof)
+    Q = Q[np.all(np.isfinite(Q), axis=1)]
     position: NDArray[np.float64] = np.zeros(0)
     rotation: NDArray[np.float64] = np.zeros(0)
     if len(Q):
@@ -226,14 +196,15 @@ def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64]
 
 
 def _missing_branches(robot: Arm, model: TargetModel, T: NDArray[np.float64],
-                      q_sampled: NDArray[np.float64], Q: NDArray[np.float64], tolerance: float,
-                      joint_tolerance: float) -> list[tuple[str, float]]:
+                      q_sampled: NDArray[np.float64], checked: _Checked, Q: NDArray[np.float64],
+                      tolerance: float, joint_tolerance: float) -> list[tuple[str, float]]:
     """(configuration, closest distance) of each branch of T (closed form or general 6R) that
-    Q lacks.
+    Q lacks (``checked``: Q's residuals on the reference, reused for a branch equal to a row).
 
     The branches are ``robot.ik(T, q_seed=q_sampled, copies=False)``, those that verify on the
     reference. A branch on the wrist singularity is a one-parameter family: only joints 1 and 5
-    are compared there.
+    are compared there. A branch is matched like the sampled q (:func:`_matched`, with the
+    sigma_min widening at the branch where the plain joint tolerance does not do).
     """
     try:
         branches = robot.ik(T, q_seed=q_sampled, copies=False)
@@ -241,26 +212,27 @@ def _missing_branches(robot: Arm, model: TargetModel, T: NDArray[np.float64],
         return []
     if not len(branches):
         return []
-    position, rotation = pose_error(model.fk(branches.q),
-                                    np.broadcast_to(T, (len(branches), 4, 4)))
-    missing = []
+    position, rotation = residuals(model, T, branches.q, Q, checked.position, checked.rotation)
     allowed = tolerance + model.deviation
-    for k in np.flatnonzero((position <= allowed) & (rotation <= allowed)):
-        branch = branches.q[k]
-        joints = (np.array(SINGULAR_FAMILY_FIXED_JOINTS) if _wrist_singular(robot, branch)
-                  else np.arange(robot.dof))
-        found, closest = _matched(robot, model, Q, branch, joints, joint_tolerance)
-        if not found:
-            name = (str(branches.configurations[k]) if k < len(branches.configurations)
-                    else f"branch {k}")
-            missing.append((name, closest))
+    verified = np.flatnonzero((position <= allowed) & (rotation <= allowed))
+    rows = branches.q[verified]
+    closest = nearest_distances(robot, Q, rows, wrist_singular(robot, rows))
+    noise = max(POSE_ROUNDING, model.deviation)
+    missing = []
+    for k, distance in zip(verified, closest, strict=True):
+        if distance <= joint_tolerance or distance <= _resolvable(
+                robot, branches.q[k], joint_tolerance, noise):
+            continue
+        name = (str(branches.configurations[k]) if k < len(branches.configurations)
+                else f"branch {k}")
+        missing.append((name, float(distance)))
     return missing
 
 
 def _nearest_to_seed(robot: Arm, Q: NDArray[np.float64],
                      seed: NDArray[np.float64]) -> tuple[float, int]:
     """Largest joint distance (mod 2pi) of the solution nearest ``seed``, and its joint."""
-    distance = np.abs(_wrap(robot, Q - seed))
+    distance = np.abs(wrap(robot, Q - seed))
     best = int(np.argmin(distance.max(axis=1)))
     joint = int(np.argmax(distance[best]))
     return float(distance[best, joint]), joint
@@ -314,14 +286,17 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
              complete_expected: bool | None = None,
              reference: str | Path | ReferenceSpec | None = None, base: str | None = None,
              tip: str | None = None, timeout: float | None = DEFAULT_CALL_TIMEOUT,
-             isolate: bool = False) -> ValidationReport:
+             isolate: bool = False, packages: Mapping[str, str | Path] | None = None
+             ) -> ValidationReport:
     """Validate ``ik`` (default: dhkin's own) on ``robot``; see the module docstring.
 
     ``complete_expected`` (default: True, except for dhkin's own numerical IK, which returns
     one solution per call) says whether missing samples and branches fail the run.
-    ``reference`` makes the targets and checks the solutions: "rounded" (default), "exact", or
-    the path of a vendor URDF whose frames ``base`` -> ``tip`` are the table's base_link ->
-    tool0 (defaults: :data:`~dhkin.vendors.VENDOR_REFERENCES`, else base_link / tool0).
+    ``reference`` makes the targets and checks the solutions: "rounded" (default), "exact",
+    "vendor" (the robot's shipped vendor URDF) or the path of a vendor URDF whose frames
+    ``base`` -> ``tip`` are the table's base_link -> tool0 (defaults:
+    :data:`~dhkin.vendors.VENDOR_REFERENCES`, else base_link / tool0); a xacro reference is
+    expanded (``packages``: {NAME: folder} for its ``$(find NAME)``).
     ``timeout`` (s, None: no limit) bounds each IK call and ``isolate`` runs the calls in a
     child process (:mod:`dhkin.validation.calls`). Every argument is checked first
     (:mod:`dhkin.validation.arguments`): a wrong one is an InputError naming it.
@@ -343,7 +318,7 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
                            if arguments.flag(complete_expected, "complete_expected",
                                              optional=True) is None
                            else bool(complete_expected)))
-    model = target_model(robot, reference, base, tip)
+    model = target_model(robot, reference, base, tip, packages)
     callable_ik = own_ik(robot) if ik is None else ik
     q, sets = sample_joint_vectors(robot, n, settings.seed)
     return run_samples(robot, model, callable_ik, q, sets,
@@ -355,7 +330,7 @@ def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.fl
          settings: RunSettings) -> ValidationReport:
     started = time.perf_counter()
     targets = model.fk(q)
-    labels = _configuration_labels(robot, targets, q)
+    labels = configuration_labels(robot, targets, q)
     report = ValidationReport(robot=robot.name, ik_name=settings.ik_name,
                               tolerance=settings.tolerance,
                               joint_tolerance=settings.joint_tolerance, seed=settings.seed,
@@ -396,7 +371,7 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
         missing: list[str] = []
         if outcome == "success" and check_branches:
             report.branch_checked += 1
-            lacking = _missing_branches(robot, model, targets[k], q[k], Q, tolerance,
+            lacking = _missing_branches(robot, model, targets[k], q[k], checked, Q, tolerance,
                                         joint_tolerance)
             if lacking:
                 missing = [name for name, _ in lacking]

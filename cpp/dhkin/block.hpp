@@ -65,7 +65,6 @@ struct FrameColumns {
 
 }  // namespace block
 
-// Whether a and b hold the same bits in every lane.
 // check() of each branch's candidate q[b] (lanes: poses) against `target`, for the branches
 // `wanted` in some lane: every joint's sine and cosine first (independent work for the
 // processor to overlap), then each branch's chain.

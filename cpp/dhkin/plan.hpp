@@ -108,6 +108,13 @@ struct Plan {
     return fixed;
   }
 
+  // |sin| of the wrist angle at joint values q (0 at the wrist singularity of the ideal model).
+  double wrist_sine(const Joints& q) const {
+    if (family == Family::offset_wrist) return std::abs(sincos(q[4] - offset.psi).s);
+    const SphericalGeometry& g = spherical;
+    return std::abs(sincos(g.wrist_directions[1] * q[4] + g.tilt).s);
+  }
+
   // The kWrist and kElbow flags of joint values q: each singularity's measure (|sin| of the wrist
   // angle, of the elbow angle; the slide's distance from its merge over the scale) at most
   // kFlagBand, from q itself (family geometry of the ideal model).

@@ -101,7 +101,8 @@ class IKSolutions:
         self._residuals: NDArray[np.float64] | None = (np.zeros((0, 2)) if residuals is None
                                                        else residuals)
         self._reason, self._family, self._numerical = reason, family, numerical
-        self._projection, self._dropped = projection, dropped
+        self._projection: float | None = projection  # None: read from _answer when asked for
+        self._dropped: int | None = dropped
         self._answer: Any = None
         self._configure: Callable[[int, tuple[int, ...]], Configuration] | None = None
 

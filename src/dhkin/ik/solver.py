@@ -247,7 +247,7 @@ class ClosedFormSolver:
             dropped[start:stop] = info[:, INFO.dropped]
             chunk_width = int(totals.sum(axis=1).max()) if stop > start else 0
             target = (self._batch_arrays(stop - start, chunk_width) if copies
-                      else tuple(a[start:stop] for a in out))  # type: ignore[union-attr]
+                      else tuple(a[start:stop] for a in out))
             chunk_targets = targets[start:stop]
 
             def expand(a: int, b: int, chunk_targets: NDArray[np.float64] = chunk_targets,
@@ -271,8 +271,8 @@ class ClosedFormSolver:
                         whole[start:stop, part_array.shape[1]:] = 0
                 out[2][start:stop, target[2].shape[1]:] = -1  # branch: none
         elif width < self.n_branches:
-            out = tuple(np.ascontiguousarray(a[:, :width]) for a in out)  # type: ignore
-        out_q, out_valid, out_branch, out_flags, out_errors = out  # type: ignore[misc]
+            out = tuple(np.ascontiguousarray(a[:, :width]) for a in out)
+        out_q, out_valid, out_branch, out_flags, out_errors = out
         return IKBatch(q=out_q, valid=out_valid, flags=out_flags, branch=out_branch,
                        branch_labels=self.branch_labels, family=self.family,
                        residuals=out_errors, projection=projection, dropped=dropped)
@@ -289,9 +289,10 @@ class ClosedFormSolver:
 
         def solve(a: int, b: int, start: int = 0) -> None:
             a, b = start + a, start + b
+            q, valid, branch, flags, errors = (array[a:b] for array in out)
             rejected, status, width = self.core.nearest(
                 targets[a:b], seeds if seeds.shape[0] == 1 else seeds[a:b], tolerance, frames,
-                *(array[a:b] for array in out), projection[a:b], dropped[a:b])
+                q, valid, branch, flags, errors, projection[a:b], dropped[a:b])
             reports.append((a + rejected if rejected >= 0 else -1, status, width, a))
 
         for start in range(0, N, chunk_size):

@@ -397,9 +397,20 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
         const FamilyRequest request_l = lane(request, l, seed_l);
         for (int e = 0; e < 2; ++e) {
           const int b = 4 * s + 2 * e + w;
+          if (request.only_branch >= 0 && b != request.only_branch) {
+            set_lane(out.valid[b], l, false);
+            continue;
+          }
           Member found;
-          if (nearest_member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), reach_side,
-                             seed_l, request_l, e, found)) {
+          // one branch asked (the valley scan): the member at the seed's q6 itself
+          const bool located =
+              request.only_branch >= 0
+                  ? (found = member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), seed_l[5],
+                                    reach_side, seed_l, request_l, e))
+                        .valid
+                  : nearest_member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), reach_side,
+                                   seed_l, request_l, e, found);
+          if (located) {
             set_lane(out.q[b][1], l, found.q2);
             set_lane(out.q[b][2], l, found.q3);
             set_lane(out.q[b][3], l, found.q4);

@@ -39,8 +39,9 @@ struct Candidates {
 // come from the seed; within `seed_angle` (|sin| of the wrist angle) and `seed_length` (m) of a
 // singularity a joint counts as free; reach conditions violated by at most `clamp` (m) are
 // clamped onto their boundary. With `only_branch` >= 0 the seeded family member of that branch
-// alone is given, the one at the seed's free joint itself, not the nearest one (the others' seeded
-// candidates are left invalid): the valley scan walks one branch's family by its free joint.
+// alone is searched (the others' seeded candidates are left invalid); with `at_seed` it is the
+// member at the seed's free joint itself, not the one nearest the seed (the valley scan and the
+// limit search walk a family by its free joint).
 struct FamilyRequest {
   const Joints* seed;
   int use_seed;
@@ -48,6 +49,7 @@ struct FamilyRequest {
   double seed_length;
   double clamp;
   int only_branch = -1;
+  bool at_seed = false;
 };
 
 inline bool finite(const Joints& q) {

@@ -371,9 +371,8 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const Frame& T,
             continue;
           }
           Member found;
-          // one branch asked (the valley scan): the member at the seed's q6 itself
           const bool located =
-              request.only_branch >= 0
+              request.at_seed
                   ? (found = member(g, T_home, minus_q1, q5, seed[5], reach_side, seed, request, e))
                         .valid
                   : nearest_member(g, T_home, minus_q1, q5, reach_side, seed, request, e, found);

@@ -102,7 +102,8 @@ def imported(name: str, reference_dir: Path) -> tuple[ImportResult, str]:
     if arm is not None:
         path = package_xacro(arm, reference_dir)
         cited = f"robots/vendor/packages/{arm.package}/urdf/{arm.xacro}"
-        upstream = f" Upstream: {provenance(arm, reference_dir)}"
+        upstream = (f" Upstream: {provenance(arm, reference_dir)}. Its expansion ships as "
+                    f"robots/vendor/{vendor.file}.")
     else:
         path = reference_dir / vendor.file
         cited = f"robots/vendor/{vendor.file}"

@@ -3,6 +3,7 @@
 // tolerance over half a turn.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -24,9 +25,6 @@ constexpr int kGrid = 63;  // ceil(kHalfWidth / kStep)
 static_assert(kGrid * kStep >= kHalfWidth && (kGrid - 1) * kStep < kHalfWidth,
               "kGrid = ceil(kHalfWidth / kStep)");
 constexpr double kPrecision = 1e-9;
-// Moves (rad or m) of a free joint off the seed tried, nearest first, when the seed's member of a
-// singular family lies outside the joint limits.
-constexpr double kLimitSteps[] = {0.02, -0.02, 0.05, -0.05, 0.1, -0.1, 0.2, -0.2, 0.4, -0.4, 0.8, -0.8};
 
 // Squared joint distance (revolute differences wrapped) from the seed of branch b's member with
 // the free joint at t; infinity where the branch has no such member. `found` receives the
@@ -83,30 +81,109 @@ inline int nearest_member(const Plan& plan, const Frame& T, const Joints& seed, 
   return found.flags[b];
 }
 
-// Branch b's seeded candidate with the free joint(s) of `bits` moved off the seed by
-// kLimitSteps, the first that verifies and lies within the limits, into `candidate`; returns its
-// errors (infinite when none). `fixed` ends as the free joints of `bits`.
+namespace members {
+
+// How far the joint values q lie outside the limits: the largest distance of a joint's nearest
+// 2pi copy beyond its range (0 inside).
+inline double limit_violation(const Plan& plan, const Joints& q) {
+  double worst = 0.0;
+  for (int j = 0; j < kDof; ++j) {
+    const JointLimit& limit = plan.limits[j];
+    double value = q[j];
+    if (plan.revolute(j)) {  // the copy nearest the middle of the range
+      const double middle = 0.5 * (limit.lower + limit.upper);
+      value += kTwoPi * std::nearbyint((middle - value) / kTwoPi);
+      // a copy on the other side may lie nearer the range
+      const double other = value + (value < middle ? kTwoPi : -kTwoPi);
+      const double outside = std::max({limit.lower - value, value - limit.upper, 0.0});
+      const double other_outside = std::max({limit.lower - other, other - limit.upper, 0.0});
+      worst = std::max(worst, std::min(outside, other_outside));
+    } else {
+      worst = std::max(worst, std::max({limit.lower - value, value - limit.upper, 0.0}));
+    }
+  }
+  return worst;
+}
+
+// The search for the member nearest the seed inside the limits resolves the free joint to this
+// (rad or m): a member found there lies within ~1e-12 of the limits' edge, far inside the slack
+// (tolerance / lever) within which a value counts as on its limit.
+constexpr double kLimitPrecision = 1e-12;
+
+}  // namespace members
+
+// Where the seed's member of branch b's singular family (free joints of `bits`) lies outside the
+// joint limits: the member nearest the seed inside them, into `candidate`; returns its errors
+// (infinite when none). Searched over the seed's value t of the free joint (the members follow
+// it) on the grid of nearest_member (the whole turn): the in-limit grid member nearest the seed,
+// else the grid's least violation; then golden-section search within a grid step, to
+// kLimitPrecision, on the distance to the seed among in-limit members (or on the violation, where
+// the in-limit members are a single point, as when two joints sit exactly on their limits).
+// `fixed` ends as the free joints of `bits`.
 inline PoseError member_in_limits(const Plan& plan, const Frame& T, const Frame& T_at,
                                   const Joints& seed, int bits, int b, double clamp,
                                   double tolerance, Joints& candidate, JointMask& fixed) {
+  using namespace members;
+  const JointMask free = plan.free_joints(bits);
+  int f = 0;
+  while (f < kDof - 1 && !free[f]) ++f;
+  const double slack = tolerance / plan.lever;
   Candidates found;
-  fixed = plan.free_joints(bits);
-  for (double step : members::kLimitSteps) {
+  struct Score {
+    bool exists = false;
+    double violation = INFINITY, distance = INFINITY;
+  };
+  const auto score = [&](double t) {
     Joints moved = seed;
-    for (int j = 0; j < kDof; ++j) {
-      if (fixed[j]) moved[j] += step;
-    }
+    moved[f] = t;
     plan.solve_family(T, moved, bits, clamp, found);
-    if (!found.valid[b] || (found.near[b] & bits) != bits) continue;
-    candidate = found.q[b];
-    fixed = plan.free_joints(bits);
-    const PoseError error = settle(plan, T_at, candidate, fixed, (found.near[b] & kClamped) != 0,
-                                   false, tolerance, true);
-    if (error.within(tolerance) && plan.in_limits(candidate, tolerance / plan.lever)) {
-      return error;
-    }
-    fixed = plan.free_joints(bits);
+    Score out;
+    if (!found.valid[b] || (found.near[b] & bits) != bits || !finite(found.q[b])) return out;
+    out.exists = true;
+    out.violation = limit_violation(plan, found.q[b]);
+    out.distance = plan.seed_distance(found.q[b], seed);
+    return out;
+  };
+  // a member is better when it is inside the limits and nearer the seed, or violates them less
+  const auto better = [&](const Score& a, const Score& c) {
+    if (!a.exists) return false;
+    if (!c.exists) return true;
+    const bool a_in = a.violation <= slack, c_in = c.violation <= slack;
+    if (a_in != c_in) return a_in;
+    return a_in ? a.distance < c.distance : a.violation < c.violation;
+  };
+  double best_t = seed[f];
+  Score best;
+  for (int k = -kGrid; k <= kGrid; ++k) {
+    const double t = seed[f] + k * kStep;
+    const Score here = score(t);
+    if (better(here, best)) best_t = t, best = here;
   }
+  if (!best.exists) return {INFINITY, INFINITY};
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  double low = best_t - kStep, high = best_t + kStep;
+  double a = high - golden * (high - low), c = low + golden * (high - low);
+  Score score_a = score(a), score_c = score(c);
+  while (high - low > kLimitPrecision) {
+    if (!better(score_c, score_a)) {
+      high = c, c = a, score_c = score_a;
+      a = high - golden * (high - low);
+      score_a = score(a);
+    } else {
+      low = a, a = c, score_a = score_c;
+      c = low + golden * (high - low);
+      score_c = score(c);
+    }
+  }
+  double t = 0.5 * (low + high);
+  if (better(best, score(t))) t = best_t;
+  if (!(score(t).violation <= slack)) return {INFINITY, INFINITY};
+  candidate = found.q[b];
+  fixed = free;
+  const PoseError error = settle(plan, T_at, candidate, fixed, (found.near[b] & kClamped) != 0,
+                                 false, tolerance, true);
+  if (error.within(tolerance) && plan.in_limits(candidate, slack)) return error;
+  fixed = free;
   return {INFINITY, INFINITY};
 }
 

@@ -13,9 +13,14 @@ namespace dhkin {
 
 namespace newton {
 
-// Refinement stops once both errors are below this fraction of the verification tolerance (a
-// thousandfold margin: the 2pi copies and the caller's check then pass without re-solving).
+// Refinement has converged once both errors are below this fraction of the verification
+// tolerance (a thousandfold margin); it then goes on polishing while Newton still improves.
 constexpr double kRefineFraction = 1e-3;
+// Polishing stops at the first step that does not shrink the squared error by this factor (the
+// error by sqrt 2): Newton's convergence is quadratic, and linear at worst near a singular root,
+// where it still gains more than that per step; a step that gains less has reached the rounding
+// of the arithmetic, where further steps only wander.
+constexpr double kPolishGain = 2.0;
 // At most this many Newton steps per refinement. The closed form starts within the model
 // deviation (millimetres on a calibrated arm); converging refinements take 3-8 steps, more when
 // the pose is near a singularity of the exact chain.
@@ -120,9 +125,11 @@ struct Settings {
 // Each step minimises |J dq - e|^2 + lambda sum_j (|J_j| dq_j)^2 over the free joints by QR
 // (lambda = 0 is Gauss-Newton), shortened to kMaxJointStep per joint. A step is taken unless it
 // makes |e| more than `growth` times larger; then lambda grows (kDampingStart, x100) and the step
-// is solved again; `damping_start` damps the first steps. Stops when both errors are below
-// kRefineFraction * tolerance, after kMaxSteps, after `budget` evaluations of the chain, or when
-// lambda passes kDampingLimit.
+// is solved again; `damping_start` damps the first steps. Converged when both errors are below
+// kRefineFraction * tolerance; it then polishes until a step no longer shrinks the squared error
+// kPolishGain-fold (the limit of the arithmetic: the tolerance decides what is returned, not how
+// well it is solved). Stops there, after kMaxSteps, after `budget` evaluations of the chain, or
+// when lambda passes kDampingLimit.
 inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, const JointMask& fixed,
                         double tolerance, const newton::Settings& settings = {}) {
   using namespace newton;
@@ -144,10 +151,10 @@ inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, cons
   int evaluations = 1;
   PoseError trial_error;
   double trial_size = 0.0;
+  bool polishing = false;  // converged: steps go on while each shrinks the error kPolishGain-fold
   for (int iteration = 0; iteration < kMaxSteps; ++iteration) {
-    if ((error.position <= goal && error.rotation <= goal) || evaluations >= settings.budget) {
-      break;
-    }
+    if (evaluations >= settings.budget || size == 0.0) break;
+    if (error.position <= goal && error.rotation <= goal) polishing = true;
     jacobian(chain, frames.data(), J);
     bool taken = false;
     while (!taken) {
@@ -169,6 +176,10 @@ inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, cons
       }
     }
     if (!taken) break;
+    if (polishing && !(trial_size * kPolishGain <= size)) {
+      if (trial_size < best_size) best_error = trial_error, best_size = trial_size, best = trial;
+      break;  // at the rounding of the arithmetic
+    }
     q = trial;
     for (int r = 0; r < 6; ++r) e[r] = trial_e[r];
     frames = trial_frames;

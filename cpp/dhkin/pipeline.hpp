@@ -92,6 +92,9 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
       // partner does, the pose has picked the partner's side of the singular family and this
       // candidate's miss is real (polishing would carry it onto the partner's member and hide the
       // distinct flip, which the regular candidate then gives)
+      // released on a refined table where the seed's member does not verify: the exact chain is
+      // not singular there, and the root in the seed's basin is kept (the seed finding a root:
+      // the known gap of refined tables, beside the seed-independent valley scan below)
       PoseError error = settle(plan, T_at, candidate, fixed, (seeded.near[b] & kClamped) != 0,
                                false, tolerance, !raw_ok[b ^ 1]);
       released[b] = !any(fixed);
@@ -124,15 +127,11 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
     const bool long_shot = !regular.valid[b] && plan.refine && finite(branches.q[b]) &&
                            (regular.near[b] & kClamped) != 0;
     if (branches.ok[b] && released[b] && regular.valid[b] && plan.refine) {
-      // the seeded candidate verified only with its free joint released: the exact chain is not
-      // singular here, and the regular candidate may reach another root of the pose (kept as an
-      // extra; the seeded root, the one nearest the seed, stays)
+      // the seeded candidate verified only with its free joint released: the regular candidate
+      // may reach another root of the pose (an extra; the seeded root, nearest the seed, stays)
       const PoseError error = settle_free(plan, T_at, regular.q[b], candidate, fixed,
                                           (regular.near[b] & kClamped) != 0, false, tolerance);
-      if (error.within(tolerance)) {
-        extras.q[b] = candidate;
-        extras.ok[b] = true;
-      }
+      if (error.within(tolerance)) extras.add(plan, b, candidate);
     }
     if (!branches.ok[b] && (regular.valid[b] || long_shot)) {
       tried = tried || regular.valid[b];
@@ -155,37 +154,59 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
                      (bits != 0 && seeded.valid[b] && (seeded.near[b] & kClamped) == 0);
     }
   }
-  // the two wrist branches of an arm branch that both took the seed's wrist and landed on the
-  // same member of the family (they differ by 2 |q5| <= 2 kFlagBand): one solution (on a refined
-  // table the seeded candidates were refined; duplicates merge below)
+  // the two wrist branches of an arm branch that both took the seed's wrist. Whether they are one
+  // solution is a property of the pose: the family is free at the tolerance when its member half
+  // a turn from a member verifies (from the seed's member or from the branch's regular root).
+  // Then the pair is one solution, in the first wrist branch's slot (the seed's member), whatever
+  // the seed; else, where both landed on the same member (they differ by 2 |q5| <= 2 kFlagBand),
+  // the flip is a distinct solution, the regular root of the second slot. (On a refined table the
+  // seeded candidates were refined; duplicates merge below.)
   for (int b = 0; b < kBranches; b += 2) {
     if (plan.refine || !branches.ok[b] || !branches.ok[b + 1] || !seeded_wrist[b] ||
-        !seeded_wrist[b + 1] || !plan.same(branches.q[b], branches.q[b + 1], 4.0 * kFlagBand)) {
+        !seeded_wrist[b + 1]) {
       continue;
     }
-    const int better =
-        branches.errors[b].largest() <= branches.errors[b + 1].largest() ? b : b + 1;
-    const int worse = b + b + 1 - better;
-    branches.ok[worse] = false;
-    if (family_free(plan, T_dh, T_at, branches.q[better], better, clamp, tolerance)) {
-      continue;  // one family at the tolerance: one solution
+    // free: the member half a turn from either seed's member verifies, or from the branch's
+    // regular root (where one half turn has no member: at a second singularity, e.g. a stretched
+    // elbow, the family leaves the reach on an arc, and its members there are moved onto it)
+    bool free = family_free(plan, T_dh, T_at, branches.q[b], b, clamp, tolerance) ||
+                family_free(plan, T_dh, T_at, branches.q[b + 1], b + 1, clamp, tolerance);
+    if (!free && regular.valid[b] &&
+        settle_free(plan, T_at, regular.q[b], candidate, fixed,
+                    (regular.near[b] & kClamped) != 0, false, tolerance)
+            .within(tolerance)) {
+      free = family_free(plan, T_dh, T_at, candidate, b, clamp, tolerance);
     }
+    if (free) {  // one family at the tolerance: one solution (the members may differ where the
+      branches.ok[b + 1] = false;  // seed's member was moved onto the reach)
+      continue;
+    }
+    if (!plan.same(branches.q[b], branches.q[b + 1], 4.0 * kFlagBand)) continue;  // distinct
+    branches.ok[b + 1] = false;
     // singular to within the seed band but not to within the tolerance over half a turn of the
     // family: the flip is a distinct solution, the regular candidate's
-    if (regular.valid[worse]) {
-      const PoseError error = settle_free(plan, T_at, regular.q[worse], candidate, fixed,
-                                          (regular.near[worse] & kClamped) != 0, false, tolerance);
+    if (regular.valid[b + 1]) {
+      const PoseError error =
+          settle_free(plan, T_at, regular.q[b + 1], candidate, fixed,
+                      (regular.near[b + 1] & kClamped) != 0, false, tolerance);
       if (error.within(tolerance) && !branches.known(plan, candidate)) {
-        branches.q[worse] = candidate;
-        branches.ok[worse] = true;
-        branches.flags[worse] = regular.flags[worse];
-        branches.errors[worse] = error;
+        branches.q[b + 1] = candidate;
+        branches.ok[b + 1] = true;
+        branches.flags[b + 1] = regular.flags[b + 1];
+        branches.errors[b + 1] = error;
       }
     }
   }
   merge_duplicates(plan, T_at, seed, tolerance, member, branches);
-  // a second root found by a branch goes to its own slot when a merge emptied that (its seeded
-  // root was another branch's), else to its wrist twin's when that has none
+  if (plan.refine) {  // the exact chain's roots along the ideal model's wrist families
+    for (int b = 0; b < kBranches; ++b) {
+      if ((regular.near[b] & kWrist) != 0 && regular.valid[b] && finite(regular.q[b])) {
+        valley_roots(plan, T_dh, T_at, regular.q[b], b, clamp, tolerance, branches, extras);
+      }
+    }
+  }
+  // a root found along a family goes to its branch's own slot when a merge emptied that, else to
+  // its wrist twin's when that has none
   place_extras(plan, T_at, extras, regular.flags, branches, 2);
   if (plan.refine) {
     retry_corrected(plan, T_dh, T_at, seed, clamp, tolerance, regular, branches);
@@ -193,6 +214,8 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
     // near a singularity the exact chain can have more roots for one ideal branch than the ideal
     // model has, while another branch's candidates found none
     place_extras(plan, T_at, extras, regular.flags, branches, kBranches);
+    place_extras(plan, T_at, extras, regular.flags, branches, kBranches, tolerance / plan.lever);
+    place_nearer_the_seed(plan, T_at, extras, seed, tolerance / plan.lever, branches);
     seed_root(plan, T_at, seed, tolerance, branches);
   }
   // flags describe the solution returned: wrist and elbow from its joint values, shoulder from

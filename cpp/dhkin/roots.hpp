@@ -1,6 +1,6 @@
 // A refined table's roots beyond the ideal model's branches: duplicates merged or split into
-// twins, corrected-target retries of lost branches, extra roots placed, and the root in the
-// seed's basin.
+// twins, corrected-target retries of lost branches, the roots along a singular family, and
+// extra roots placed.
 #pragma once
 
 #include <cmath>
@@ -14,13 +14,13 @@ namespace dhkin {
 // Corrected-target retries of a lost branch (each one family solve and one refinement).
 constexpr int kCorrections = 2;
 
-// A refined table's seed within one maximal Newton step of the pose (rotation error at most
-// kMaxJointStep, position error at most that times the lever) is a start as good as the ideal
-// model's closed form, which is up to the family band off the exact chain: a monotone, damped
-// descent from it (kSeedDamping) finds the root in its basin. Near a singularity the exact chain
-// can have roots the ideal model has not; such a root, when it is nearer the seed than the
-// solution of the branch it lies nearest, takes that branch's slot (its solution moves to the
-// nearest empty slot, if any).
+// The one place where the seed still finds (known gap, docs/ik_core.md): on a refined table a
+// root the valley scan misses (near a reach boundary and the wrist singularity at once, where the
+// ideal model's family members are clamped onto the reach) is looked for from a seed within one
+// maximal Newton step of the pose (rotation error at most kMaxJointStep, position error at most
+// that times the lever): a monotone, damped descent from it (kSeedDamping) finds the root in its
+// basin; when it is nearer the seed than the solution of the branch it lies nearest, it takes
+// that branch's slot (its solution moves to the nearest empty slot, if any).
 inline void seed_root(const Plan& plan, const Frame& T, const Joints& seed, double tolerance,
                       Branches& branches) {
   const Chain& chain = plan.chain;
@@ -62,28 +62,167 @@ inline void seed_root(const Plan& plan, const Frame& T, const Joints& seed, doub
   branches.errors[slot] = error;
 }
 
-// Roots found beside a branch's own (one per branch slot at most).
+// Roots found beside the branches' own, each with the branch it was found from.
 struct Extras {
-  std::array<Joints, kBranches> q{};
-  std::array<bool, kBranches> ok{};
+  static constexpr int kCapacity = 4 * kBranches;
+  std::array<Joints, kCapacity> q{};
+  std::array<int, kCapacity> branch{};
+  int count = 0;
+
+  // Adds a root unless it is one of the extras already (2 kMergeAngle, mod 2pi).
+  void add(const Plan& plan, int b, const Joints& root) {
+    for (int k = 0; k < count; ++k) {
+      if (plan.same(q[k], root, 2.0 * kMergeAngle)) return;
+    }
+    if (count < kCapacity) q[count] = root, branch[count] = b, ++count;
+  }
 };
 
 // Each verified extra root that no slot holds yet goes to the first empty slot among b ^ 0,
-// b ^ 1, ..., b ^ (reach - 1) (own, wrist twin, elbow pair, shoulder partners).
+// b ^ 1, ..., b ^ (reach - 1) (own, wrist twin, elbow pair, shoulder partners) of the branch b
+// it was found from; with `slack` (the limit slack, tolerance / lever), an extra root inside the
+// joint limits may also take a slot whose root has no copy inside them (that root would not be
+// answered: near a singular set the exact chain can have more roots than the ideal model's eight
+// branches, and those that the limits admit are kept; the slot's labels are then its own).
 inline void place_extras(const Plan& plan, const Frame& T, const Extras& extras,
                          const std::array<std::uint8_t, kBranches>& extra_flags,
-                         Branches& branches, int reach) {
-  for (int b = 0; b < kBranches; ++b) {
-    if (!extras.ok[b] || branches.known(plan, extras.q[b])) continue;
-    for (int k = 0; k < reach; ++k) {
-      const int slot = b ^ k;
-      if (!branches.ok[slot]) {
-        branches.q[slot] = extras.q[b];
+                         Branches& branches, int reach, double slack = -1.0) {
+  for (int k = 0; k < extras.count; ++k) {
+    const int b = extras.branch[k];
+    if (branches.known(plan, extras.q[k])) continue;
+    const bool admitted = slack >= 0.0 && plan.in_limits(extras.q[k], slack);
+    for (int step = 0; step < reach; ++step) {
+      const int slot = b ^ step;
+      if (!branches.ok[slot] ||
+          (admitted && !plan.in_limits(branches.q[slot], slack))) {
+        branches.q[slot] = extras.q[k];
         branches.ok[slot] = true;
         branches.flags[slot] = extra_flags[b];
         branches.errors[slot] = check(plan.chain, branches.q[slot].data(), T);
         break;
       }
+    }
+  }
+}
+
+// Near a singular set the exact chain of a refined table can have more roots inside the limits
+// than the eight branch slots (a calibrated UR5e at q5 = 0: nine or ten). Every root is found
+// without the seed (valley_roots); where one still has no slot, the seed chooses which of the
+// competing roots a slot shows: an extra root takes the slot of the root nearest it (its
+// neighbour on the family) when it lies nearer the seed than that root.
+inline void place_nearer_the_seed(const Plan& plan, const Frame& T, const Extras& extras,
+                                  const Joints& seed, double slack, Branches& branches) {
+  for (int k = 0; k < extras.count; ++k) {
+    const Joints& root = extras.q[k];
+    if (branches.known(plan, root) || !plan.in_limits(root, slack)) continue;
+    int slot = -1;
+    double nearest = INFINITY;
+    for (int b = 0; b < kBranches; ++b) {
+      if (!branches.ok[b]) continue;
+      const double distance = plan.seed_distance(branches.q[b], root);
+      if (distance < nearest) slot = b, nearest = distance;
+    }
+    if (slot >= 0 && plan.seed_distance(root, seed) < plan.seed_distance(branches.q[slot], seed)) {
+      branches.q[slot] = root;
+      branches.errors[slot] = check(plan.chain, root.data(), T);
+    }
+  }
+}
+
+// Points of a singular family scanned for the exact chain's roots along it: the free wrist joint
+// of the seed given to the family over a whole turn in this many steps (the family's members
+// then cover the turn once).
+constexpr int kValleyGrid = 16;
+// Steps of successive parabolic interpolation that take a local minimum of the scan to the root
+// beside it: the squared residual is quadratic near a root, so each step gains about as many
+// digits as it has (from a grid step of ~0.4 rad, four reach ~1e-6 rad and the descent below
+// then converges at once).
+constexpr int kValleySteps = 4;
+
+namespace valley {
+
+// A member of branch b's family with the seed's free wrist joint at t, refined on the exact chain
+// with that joint held; its squared residual (infinite where the family has no member).
+struct Point {
+  double t = 0.0, squared = INFINITY;
+  Joints q{};
+};
+
+inline Point held_member(const Plan& plan, const Frame& T_dh, const Frame& T_at,
+                         const Joints& base, int b, double t, double clamp, double tolerance,
+                         Candidates& found) {
+  Point point;
+  point.t = t;
+  Joints moved = base;
+  moved[plan.free_wrist] = t;
+  plan.solve_family(T_dh, moved, kWrist, clamp, found);
+  if (!found.valid[b] || !finite(found.q[b])) return point;
+  point.q = found.q[b];
+  plan.wrap_revolute(point.q);
+  const double r = refine(plan.chain, T_at, point.q, plan.free_joints(kWrist), tolerance,
+                          {kPolishBudget, newton::kGrowth, 0.0})
+                       .largest();
+  point.squared = r * r;
+  return point;
+}
+
+}  // namespace valley
+
+// On a refined table near the wrist singularity the exact chain is not singular: where the ideal
+// model has a one-parameter family, the exact chain has isolated roots along it (the flip pair,
+// and beside them others: a wrist 0.175 mm from spherical, a calibrated UR5e, have three or four
+// per family near q5 = 0). They are found without the seed: the family's members over the whole
+// turn (kValleyGrid), each refined on the exact chain with its free joint held (what remains is
+// how far the exact chain is from reaching the pose there); each local minimum of that residual
+// along the turn taken to the root beside it by parabolic interpolation on the squared residual
+// (kValleySteps), then every joint released: a monotone descent and Newton's polish. Every
+// verified root not yet known is an extra of branch b.
+inline void valley_roots(const Plan& plan, const Frame& T_dh, const Frame& T_at,
+                         const Joints& regular_q, int b, double clamp, double tolerance,
+                         const Branches& known, Extras& extras) {
+  using valley::Point;
+  Candidates found;
+  std::array<Point, kValleyGrid> grid;
+  const double start = regular_q[plan.free_wrist], step = kTwoPi / kValleyGrid;
+  for (int k = 0; k < kValleyGrid; ++k) {
+    grid[k] = valley::held_member(plan, T_dh, T_at, regular_q, b, start + k * step, clamp,
+                                  tolerance, found);
+  }
+  const JointMask none{};
+  for (int k = 0; k < kValleyGrid; ++k) {
+    Point left = grid[(k + kValleyGrid - 1) % kValleyGrid], middle = grid[k],
+          right = grid[(k + 1) % kValleyGrid];
+    if (!(middle.squared <= left.squared && middle.squared <= right.squared)) continue;
+    left.t = middle.t - step, right.t = middle.t + step;  // the neighbours across the seam
+    for (int s = 0; s < kValleySteps && std::isfinite(left.squared + right.squared); ++s) {
+      // the vertex of the parabola through the three points, kept inside the bracket
+      const double a = (middle.t - left.t) * (middle.squared - right.squared);
+      const double c = (middle.t - right.t) * (middle.squared - left.squared);
+      const double denominator = 2.0 * (a - c);
+      if (!(std::abs(denominator) > 0.0)) break;
+      double t = middle.t - ((middle.t - left.t) * a - (middle.t - right.t) * c) / denominator;
+      t = std::min(std::max(t, left.t), right.t);
+      const Point next = valley::held_member(plan, T_dh, T_at, regular_q, b, t, clamp,
+                                             tolerance, found);
+      if (!(next.squared < middle.squared)) break;
+      if (next.t < middle.t) {
+        right = middle;
+      } else {
+        left = middle;
+      }
+      middle = next;
+    }
+    Joints root = middle.q;
+    if (!std::isfinite(middle.squared) ||
+        !refine(plan.chain, T_at, root, none, tolerance,
+                {newton::kBudget, newton::kMonotone, newton::kSeedDamping})
+             .within(tolerance)) {
+      continue;
+    }
+    refine(plan.chain, T_at, root, none, tolerance);  // polished
+    plan.wrap_revolute(root);
+    if (check(plan.chain, root.data(), T_at).within(tolerance) && !known.known(plan, root)) {
+      extras.add(plan, b, root);
     }
   }
 }

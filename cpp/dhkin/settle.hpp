@@ -18,17 +18,19 @@ inline bool any(const JointMask& mask) {
 // Wrap a candidate's revolute values, refine it on the exact chain if the plan says so (joints
 // marked `fixed` keep their value; a candidate that is an exact solution of the ideal model, not
 // `clamped`, is followed by continuation where Newton fails), or polish it by Newton where an
-// exact table's candidate does not verify (when `polish`); return its errors. `fixed` is cleared
-// when the seed's choice of a free joint had to be released.
+// exact table's candidate does not verify (when `polish`); return its errors. With `release`,
+// a refined candidate whose fixed joints keep it from verifying is refined again with them free
+// (`fixed` is then cleared); without, it stays a member of the singular family or fails.
 inline PoseError settle(const Plan& plan, const Frame& target, Joints& values, JointMask& fixed,
-                        bool clamped, bool long_shot, double tolerance, bool polish = true) {
+                        bool clamped, bool long_shot, double tolerance, bool polish = true,
+                        bool release = true) {
   const Chain& chain = plan.chain;
   plan.wrap_revolute(values);
   if (plan.refine) {
     const Joints start = values;
     const int budget = long_shot ? kLongShotBudget : newton::kBudget;
     PoseError error = refine(chain, target, values, fixed, tolerance, {budget, newton::kGrowth, 0.0});
-    if (any(fixed) && !error.within(tolerance)) {
+    if (release && any(fixed) && !error.within(tolerance)) {
       // the exact chain is not singular here (its singular set is shifted, or a calibration
       // leaves none): the seed's choice of the free joint is not exact, so release it from where
       // it got to (the caller sees `fixed` cleared)
@@ -40,6 +42,24 @@ inline PoseError settle(const Plan& plan, const Frame& target, Joints& values, J
       if (!error.within(tolerance)) {
         values = held;
         error = refine(chain, target, values, fixed, tolerance, {budget, newton::kGrowth, 0.0});
+      }
+    }
+    const double goal = newton::kRefineFraction * tolerance;
+    const bool unpolished = error.position > goal || error.rotation > goal;
+    if (error.within(tolerance) && (unpolished || any(fixed))) {
+      // verified before Newton stopped improving (a monotone descent's budget spent):
+      // polished while it still improves. A seed's member (free joint held) is polished with
+      // every joint free: the exact chain's root near the member where the pose fixes it; on an
+      // exact singular family the held point is already exact and no step gains. `fixed` stays
+      // set: the seed chose this member
+      Joints polished = values;
+      JointMask none{};
+      const PoseError polished_error = refine(chain, target, polished, none, tolerance,
+                                              {kPolishBudget, newton::kGrowth, 0.0});
+      if (std::max(polished_error.position, polished_error.rotation) <
+          std::max(error.position, error.rotation)) {
+        values = polished;
+        error = polished_error;
       }
     }
     if (!clamped && !error.within(tolerance)) {  // follow the branch from the ideal model

@@ -198,9 +198,15 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
     }
   }
   merge_duplicates(plan, T_at, seed, tolerance, member, branches);
-  if (plan.refine) {  // the exact chain's roots along the ideal model's wrist families
+  if (plan.refine) {
+    // the exact chain's roots along the ideal model's wrist families, where its wrist singular
+    // set may lie: within the seed band of the ideal model's, at the ideal candidate or at the
+    // exact root refined from it (the ideal q5 can be far off near the shoulder singularity)
     for (int b = 0; b < kBranches; ++b) {
-      if ((regular.near[b] & kWrist) != 0 && regular.valid[b] && finite(regular.q[b])) {
+      const bool in_band = plan.wrist_sine(regular.q[b]) <= plan.seed_angle ||
+                           (branches.ok[b] && plan.wrist_sine(branches.q[b]) <= plan.seed_angle);
+      if ((regular.near[b] & kWrist) != 0 && in_band && regular.valid[b] &&
+          finite(regular.q[b])) {
         valley_roots(plan, T_dh, T_at, regular.q[b], b, clamp, tolerance, branches, extras);
       }
     }

@@ -107,18 +107,24 @@ struct Plan {
     return fixed;
   }
 
+  // |sin| of the wrist angle at joint values q (0 at the wrist singularity of the ideal model).
+  double wrist_sine(const Joints& q) const {
+    if (family == Family::offset_wrist) return std::abs(sincos(q[4] - offset.psi).s);
+    const SphericalGeometry& g = spherical;
+    return std::abs(sincos(g.wrist_directions[1] * q[4] + g.tilt).s);
+  }
+
   // The kWrist and kElbow flags of joint values q: each singularity's measure (|sin| of the wrist
   // angle, of the elbow angle; the slide's distance from its merge over the scale) at most
   // kFlagBand, from q itself (family geometry of the ideal model).
   std::uint8_t value_flags(const Joints& q) const {
     std::uint8_t bits = 0;
+    if (wrist_sine(q) <= kFlagBand) bits |= kWrist;
     if (family == Family::offset_wrist) {
-      if (std::abs(sincos(q[4] - offset.psi).s) <= kFlagBand) bits |= kWrist;
       if (std::abs(sincos(q[2] - offset.elbow_base).s) <= kFlagBand) bits |= kElbow;
       return bits;
     }
     const SphericalGeometry& g = spherical;
-    if (std::abs(sincos(g.wrist_directions[1] * q[4] + g.tilt).s) <= kFlagBand) bits |= kWrist;
     if (family == Family::spherical_wrist) {
       if (std::abs(sincos(g.signs[2] * q[2] + g.bend_at_zero).s) <= kFlagBand) bits |= kElbow;
     } else if (std::abs(g.signs[2] * q[2] + g.slide_along) <= kFlagBand * g.scale) {

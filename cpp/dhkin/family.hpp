@@ -38,13 +38,16 @@ struct Candidates {
 // How a family's closed form is asked: `use_seed` (singularity bits) selects which free joints
 // come from the seed; within `seed_angle` (|sin| of the wrist angle) and `seed_length` (m) of a
 // singularity a joint counts as free; reach conditions violated by at most `clamp` (m) are
-// clamped onto their boundary.
+// clamped onto their boundary. With `only_branch` >= 0 the seeded family member of that branch
+// alone is given, the one at the seed's free joint itself, not the nearest one (the others' seeded
+// candidates are left invalid): the valley scan walks one branch's family by its free joint.
 struct FamilyRequest {
   const Joints* seed;
   int use_seed;
   double seed_angle;
   double seed_length;
   double clamp;
+  int only_branch = -1;
 };
 
 inline bool finite(const Joints& q) {

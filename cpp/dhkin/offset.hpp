@@ -366,8 +366,18 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const Frame& T,
       if (wrist_seeded && q1_valid) {
         for (int e = 0; e < 2; ++e) {
           const int b = 4 * s + 2 * e + w;
+          if (request.only_branch >= 0 && b != request.only_branch) {
+            out.valid[b] = false;
+            continue;
+          }
           Member found;
-          if (nearest_member(g, T_home, minus_q1, q5, reach_side, seed, request, e, found)) {
+          // one branch asked (the valley scan): the member at the seed's q6 itself
+          const bool located =
+              request.only_branch >= 0
+                  ? (found = member(g, T_home, minus_q1, q5, seed[5], reach_side, seed, request, e))
+                        .valid
+                  : nearest_member(g, T_home, minus_q1, q5, reach_side, seed, request, e, found);
+          if (located) {
             out.q[b][1] = found.q2, out.q[b][2] = found.q3, out.q[b][3] = found.q4;
             out.q[b][5] = found.q6;
             out.valid[b] = true;

@@ -88,9 +88,10 @@ struct Plan {
   double clamp(double tolerance) const { return tolerance * (1.0 + lever) + deviation; }
 
   // The family's closed form for target T (DH frame 0 -> n).
+  // With `only_branch` >= 0, a seeded member is searched for that branch alone (FamilyRequest).
   void solve_family(const Frame& T, const Joints& seed, int use_seed, double clamp,
-                    Candidates& out) const {
-    const FamilyRequest request{&seed, use_seed, seed_angle, seed_length, clamp};
+                    Candidates& out, int only_branch = -1) const {
+    const FamilyRequest request{&seed, use_seed, seed_angle, seed_length, clamp, only_branch};
     switch (family) {
       case Family::spherical_wrist: solve_spherical_wrist(spherical, T, request, out); break;
       case Family::stanford: solve_stanford(spherical, T, request, out); break;

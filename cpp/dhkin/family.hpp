@@ -45,8 +45,9 @@ using Candidates = CandidatesT<double>;
 // come from the seed; within `seed_angle` (|sin| of the wrist angle) and `seed_length` (m) of a
 // singularity a joint counts as free; reach conditions violated by at most `clamp` (m) are
 // clamped onto their boundary. With `only_branch` >= 0 the seeded family member of that branch
-// alone is given, the one at the seed's free joint itself, not the nearest one (the others' seeded
-// candidates are left invalid): the valley scan walks one branch's family by its free joint.
+// alone is searched (the others' seeded candidates are left invalid); with `at_seed` it is the
+// member at the seed's free joint itself, not the one nearest the seed (the valley scan and the
+// limit search walk a family by its free joint).
 template <class V>
 struct FamilyRequestT {
   const JointsT<V>* seed;
@@ -55,6 +56,7 @@ struct FamilyRequestT {
   double seed_length;
   double clamp;
   int only_branch = -1;
+  bool at_seed = false;
 };
 using FamilyRequest = FamilyRequestT<double>;
 
@@ -62,8 +64,8 @@ using FamilyRequest = FamilyRequestT<double>;
 template <class V>
 inline FamilyRequest lane(const FamilyRequestT<V>& request, int l, Joints& seed) {
   for (int j = 0; j < kDof; ++j) seed[j] = lane((*request.seed)[j], l);
-  return {&seed, request.use_seed, request.seed_angle, request.seed_length, request.clamp,
-          request.only_branch};
+  return {&seed,         request.use_seed,    request.seed_angle, request.seed_length,
+          request.clamp, request.only_branch, request.at_seed};
 }
 
 inline bool finite(const Joints& q) {

@@ -136,7 +136,8 @@ inline PoseError member_in_limits(const Plan& plan, const Frame& T, const Frame&
   const auto score = [&](double t) {
     Joints moved = seed;
     moved[f] = t;
-    plan.solve_family(T, moved, bits, clamp, found);
+    // searched over the wrist's free joint: the member at t itself (no nearest-member search)
+    plan.solve_family(T, moved, bits, clamp, found, b, f == plan.free_wrist);
     Score out;
     if (!found.valid[b] || (found.near[b] & bits) != bits || !finite(found.q[b])) return out;
     out.exists = true;
@@ -195,7 +196,7 @@ inline bool family_free(const Plan& plan, const Frame& T, const Frame& T_at,
   moved[3] += kPi;
   moved[5] += kPi;
   Candidates found;
-  plan.solve_family(T, moved, kWrist, clamp, found);
+  plan.solve_family(T, moved, kWrist, clamp, found, b);
   if (!found.valid[b] || (found.near[b] & kWrist) == 0) return false;
   return check(plan.chain, found.q[b].data(), T_at).within(tolerance);
 }

@@ -402,9 +402,8 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
             continue;
           }
           Member found;
-          // one branch asked (the valley scan): the member at the seed's q6 itself
           const bool located =
-              request.only_branch >= 0
+              request.at_seed
                   ? (found = member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), seed_l[5],
                                     reach_side, seed_l, request_l, e))
                         .valid

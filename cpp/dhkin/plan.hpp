@@ -88,11 +88,12 @@ struct Plan {
   double clamp(double tolerance) const { return tolerance * (1.0 + lever) + deviation; }
 
   // The family's closed form for target T (DH frame 0 -> n); per lane for V = Lanes.
-  // With `only_branch` >= 0, a seeded member is searched for that branch alone (FamilyRequest).
+  // `only_branch` and `at_seed`: which seeded member is searched, and how (FamilyRequest).
   template <class V>
   void solve_family(const FrameT<V>& T, const JointsT<V>& seed, int use_seed, double clamp,
-                    CandidatesT<V>& out, int only_branch = -1) const {
-    const FamilyRequestT<V> request{&seed, use_seed, seed_angle, seed_length, clamp, only_branch};
+                    CandidatesT<V>& out, int only_branch = -1, bool at_seed = false) const {
+    const FamilyRequestT<V> request{&seed,       use_seed,    seed_angle, seed_length,
+                                    clamp,       only_branch, at_seed};
     switch (family) {
       case Family::spherical_wrist: solve_spherical_wrist(spherical, T, request, out); break;
       case Family::stanford: solve_stanford(spherical, T, request, out); break;

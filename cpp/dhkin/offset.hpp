@@ -24,6 +24,7 @@
 #include "dhkin/bands.hpp"
 #include "dhkin/family.hpp"
 #include "dhkin/frame.hpp"
+#include "dhkin/golden.hpp"
 
 namespace dhkin {
 
@@ -262,7 +263,6 @@ constexpr int kMemberGrid = 63;  // ceil(kMemberHalfWidth / kMemberStep)
 static_assert(kMemberGrid * kMemberStep >= kMemberHalfWidth &&
                   (kMemberGrid - 1) * kMemberStep < kMemberHalfWidth,
               "kMemberGrid = ceil(kMemberHalfWidth / kMemberStep)");
-const double kGolden = 0.5 * (std::sqrt(5.0) - 1.0);
 
 // At the wrist singularity the pose leaves a one-parameter family (q6 free, q2, q3, q4 following
 // it): the member nearest the seed in joint space (squared distance over joints 2-4 and 6),
@@ -281,21 +281,10 @@ inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const S
     const Member m = member(g, T_home, t1, q5, t, reach_side, seed, request, e);
     return m.valid ? m.distance : std::numeric_limits<double>::infinity();
   };
-  double low = best_t - kMemberStep, high = best_t + kMemberStep;
-  double a = high - kGolden * (high - low), b = low + kGolden * (high - low);
-  double value_a = value(a), value_b = value(b);
-  while (high - low > kMemberPrecision) {
-    if (value_a <= value_b) {
-      high = b, b = a, value_b = value_a;
-      a = high - kGolden * (high - low);
-      value_a = value(a);
-    } else {
-      low = a, a = b, value_a = value_b;
-      b = low + kGolden * (high - low);
-      value_b = value(b);
-    }
-  }
-  found = member(g, T_home, t1, q5, 0.5 * (low + high), reach_side, seed, request, e);
+  const double middle =
+      golden_section(best_t - kMemberStep, best_t + kMemberStep, kMemberPrecision, value,
+                     [](double left, double right) { return left <= right; });
+  found = member(g, T_home, t1, q5, middle, reach_side, seed, request, e);
   if (!found.valid || found.distance > best) {  // the grid point is better (a kink inside)
     found = member(g, T_home, t1, q5, best_t, reach_side, seed, request, e);
   }

@@ -264,7 +264,7 @@ def opw_library(robot: dhkin.Robot) -> Library | str:
     try:
         params = opw_parameters(robot.table)  # checked against the table's FK to 1e-12
     except FamilyError as exc:
-        return f"not an OPW arm ({str(exc).splitlines()[1].strip()})"
+        return f"not an OPW arm ({str(exc).splitlines()[-1].strip()})"  # one line or several
     model = KinematicModel(**params.geometric, offsets=params.offsets,
                            flip_axes=tuple(sign < 0 for sign in params.sign_corrections))
     opw = OpwRobot(model, False)  # radians

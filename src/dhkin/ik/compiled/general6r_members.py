@@ -36,6 +36,18 @@ from dhkin.ik.compiled.jit import jit
 #: continuity distance of a member.
 WALK_STEPS = 100
 
+#: A step of :func:`walk` from a point on a curve of solutions (the Jacobian's smallest
+#: singular value at most the tolerance: a step of up to a radian along the weakest direction
+#: moves the pose less than the tolerance at first order, and a point of a true curve shows
+#: ~1e-15) stays on that curve when the chord's midpoint, refined by Newton, lands within
+#: CHORD_BEND of the chord's length of it: on a curve of radius r a chord of length L bends
+#: L^2 / (8 r) from it, within a quarter of L for every chord up to the curve's diameter; a
+#: jump between two distinct roots puts the refined midpoint on one of them, half the chord
+#: from it (or nowhere). From an isolated root whose smallest singular value is above the
+#: tolerance (near a fold: 3e-8 on the IRB 1200's split elbow roots, whose near-solutions
+#: join them in a valley within the tolerance) the chord's midpoint itself must verify.
+CHORD_BEND = 0.25
+
 
 @jit
 def walk(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float64],
@@ -47,8 +59,9 @@ def walk(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float
     over ``lever``, within ``band``) by the seed's offset projected onto them, at most
     MAX_JOINT_STEP per joint, is refined by Newton on the exact chain (target T, 3 or 4 rows)
     and kept while it verifies at ``tolerance``, comes nearer the seed and stays on the same
-    root (the midpoint of the step verifies too: the merging rule; near a fold Newton could
-    land on a distinct root nearer the seed); a failed step is retried a quarter as long,
+    root (:data:`CHORD_BEND`: on a curve of solutions the step's refined midpoint lies near
+    its chord; elsewhere the midpoint itself verifies, the merging rule: near a fold Newton
+    could land on a distinct root nearer the seed); a failed step is retried a quarter as long,
     down to ``band`` (:data:`WALK_STEPS` trials), and the walk ends where the seed's offset
     along the weak directions is within ``tolerance`` (rad). Where the pose is only
     near-singular Newton returns to the root, or lands on another one (near a fold), and q
@@ -68,7 +81,7 @@ def walk(chain: NDArray[np.float64], T: NDArray[np.float64], q: NDArray[np.float
         distance += _wrap(q[j] - seed[j]) ** 2
     length = MAX_JOINT_STEP
     _walk(chain, target, q, seed, tolerance, lever, band, error, distance, length, fixed,
-          state, frames, J, step, offset, trial, middle)
+          state, frames, J, step, offset, trial, middle, np.empty(6))
     # polish: monotone Newton steps from the member reached (Newton converges slowly at a
     # singular root; these bring its residual to REFINE_FRACTION of the tolerance)
     for j in range(6):
@@ -89,7 +102,8 @@ def _walk(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np
           error: NDArray[np.float64], distance: float, length: float,
           fixed: NDArray[np.bool_], state: NDArray[np.float64], frames: NDArray[np.float64],
           J: NDArray[np.float64], step: NDArray[np.float64], offset: NDArray[np.float64],
-          trial: NDArray[np.float64], middle: NDArray[np.float64]) -> None:
+          trial: NDArray[np.float64], middle: NDArray[np.float64],
+          midpoint: NDArray[np.float64]) -> None:
     """:func:`walk`'s steps (its work arrays passed in)."""
     for _ in range(WALK_STEPS):
         fk_frames(chain, q, frames)
@@ -119,12 +133,29 @@ def _walk(chain: NDArray[np.float64], target: NDArray[np.float64], q: NDArray[np
         refine(chain, target, trial, fixed, tolerance, 4 * MAX_STEPS, GROWTH, 0.0)
         position, rotation = check(chain, trial, target, state)
         trial_distance = 0.0
+        chord = 0.0
         for j in range(6):
             trial_distance += _wrap(trial[j] - seed[j]) ** 2
-            middle[j] = q[j] + 0.5 * _wrap(trial[j] - q[j])
-        between_position, between_rotation = check(chain, middle, target, state)
-        if not (position <= tolerance and rotation <= tolerance and trial_distance < distance
-                and between_position <= tolerance and between_rotation <= tolerance):
+            chord = max(chord, abs(_wrap(trial[j] - q[j])))
+        kept = (position <= tolerance and rotation <= tolerance and trial_distance < distance
+                and chord > 0.0)
+        if kept and sigma[5] > tolerance:  # an isolated (near-)singular root's cloud
+            for j in range(6):
+                middle[j] = q[j] + 0.5 * _wrap(trial[j] - q[j])
+            between_position, between_rotation = check(chain, middle, target, state)
+            kept = between_position <= tolerance and between_rotation <= tolerance
+        elif kept:  # on a curve of solutions
+            for j in range(6):
+                middle[j] = q[j] + 0.5 * _wrap(trial[j] - q[j])
+                midpoint[j] = middle[j]
+            refine(chain, target, middle, fixed, tolerance, 4 * MAX_STEPS, 1.0, 0.0)
+            between_position, between_rotation = check(chain, middle, target, state)
+            moved = 0.0
+            for j in range(6):
+                moved = max(moved, abs(_wrap(middle[j] - midpoint[j])))
+            kept = (between_position <= tolerance and between_rotation <= tolerance
+                    and moved <= CHORD_BEND * chord)
+        if not kept:
             length = 0.25 * min(length, longest)
             if length <= band:
                 return

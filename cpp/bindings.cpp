@@ -11,11 +11,13 @@
 
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "dhkin/batch.hpp"
 #include "dhkin/chain.hpp"
 #include "dhkin/expand.hpp"
 #include "dhkin/pipeline.hpp"
@@ -266,41 +268,53 @@ Output<T> new_array(std::initializer_list<std::size_t> shape) {
   return Output<T>(data, shape.size(), shape.begin(), owner);
 }
 
-// One pose's answer: its solutions (at most eight inline, more with every 2pi copy) and what
+// One pose's answer: its solutions (one per branch inline, more with every 2pi copy) and what
 // happened to the pose; dhkin.ik.result.IKSolutions reads its arrays when they are asked for.
 class Answer {
  public:
-  std::vector<dhkin::Solution> solutions;
   dhkin::PoseInfo info;
   dhkin::JointMask revolute{};
 
-  std::size_t count() const { return solutions.size(); }
+  std::size_t count() const { return stored_; }
+  // The number of solutions, or -1 when the pose or the seed was rejected (info.status).
+  long found() const { return info.status == dhkin::kUsable ? static_cast<long>(stored_) : -1; }
+  void add(const dhkin::Solution& solution) {
+    if (stored_ < first_.size()) {
+      first_[stored_] = solution;
+    } else {
+      more_.push_back(solution);
+    }
+    ++stored_;
+  }
+  const dhkin::Solution& at(std::size_t i) const {
+    return i < first_.size() ? first_[i] : more_[i - first_.size()];
+  }
 
   Output<double> q() const {
     auto out = new_array<double>({count(), static_cast<std::size_t>(kDof)});
     for (std::size_t i = 0; i < count(); ++i) {
-      for (int j = 0; j < kDof; ++j) out.data()[kDof * i + j] = solutions[i].q[j];
+      for (int j = 0; j < kDof; ++j) out.data()[kDof * i + j] = at(i).q[j];
     }
     return out;
   }
 
   Output<std::int16_t> branch() const {
     auto out = new_array<std::int16_t>({count()});
-    for (std::size_t i = 0; i < count(); ++i) out.data()[i] = static_cast<std::int16_t>(solutions[i].branch);
+    for (std::size_t i = 0; i < count(); ++i) out.data()[i] = static_cast<std::int16_t>(at(i).branch);
     return out;
   }
 
   Output<std::uint8_t> flags() const {
     auto out = new_array<std::uint8_t>({count()});
-    for (std::size_t i = 0; i < count(); ++i) out.data()[i] = solutions[i].flags;
+    for (std::size_t i = 0; i < count(); ++i) out.data()[i] = at(i).flags;
     return out;
   }
 
   Output<double> residuals() const {
     auto out = new_array<double>({count(), 2});
     for (std::size_t i = 0; i < count(); ++i) {
-      out.data()[2 * i] = solutions[i].error.position;
-      out.data()[2 * i + 1] = solutions[i].error.rotation;
+      out.data()[2 * i] = at(i).error.position;
+      out.data()[2 * i + 1] = at(i).error.rotation;
     }
     return out;
   }
@@ -309,7 +323,8 @@ class Answer {
   // branch index and turns: the key of a configuration.
   nb::list configuration_keys() const {
     nb::list out;
-    for (const dhkin::Solution& s : solutions) {
+    for (std::size_t i = 0; i < count(); ++i) {
+      const dhkin::Solution& s = at(i);
       nb::tuple turns = nb::steal<nb::tuple>(PyTuple_New(kDof));
       for (int j = 0; j < kDof; ++j) {
         const long turn = revolute[j] ? static_cast<long>(std::nearbyint(s.q[j] / dhkin::kTwoPi)) : 0;
@@ -325,12 +340,18 @@ class Answer {
     for (int k = 0; k < dhkin::kWhySize; ++k) out.data()[k] = info.why[k];
     return out;
   }
+
+ private:
+  std::array<dhkin::Solution, kBranches> first_{};
+  std::vector<dhkin::Solution> more_;
+  std::size_t stored_ = 0;
 };
 
 class ClosedForm {
  public:
   ClosedForm(const nb::dict& plan, Input<double, nb::shape<2, 4, 4>> frames)
-      : solver_(make_plan(plan), target_frames(frames)) {}
+      : solver_(make_plan(plan), target_frames(frames)),
+        default_plan_(&solver_.plan_for(solver_.default_frames(), unused_)) {}
 
   // One pose (4 x 4, base_link -> tool0, or -> the TCP of `frames`): its Answer. Without a
   // seed the seed is zero; without frames, the table's own base and tool.
@@ -339,23 +360,28 @@ class ClosedForm {
                bool copies) const {
     const dhkin::TargetFrames targets =
         frames ? target_frames(*frames) : solver_.default_frames();
-    dhkin::Plan storage;
-    const dhkin::Plan& plan = solver_.plan_for(targets, storage);
+    std::unique_ptr<dhkin::Plan> storage;  // the plan of a TCP of the call's own
+    const dhkin::Plan* plan = default_plan_;
+    if (frames) {
+      storage = std::make_unique<dhkin::Plan>();
+      plan = &solver_.plan_for(targets, *storage);
+    }
     const Joints seed_q = seed ? joints_of(seed->data()) : Joints{};
     Answer answer;
-    for (int j = 0; j < kDof; ++j) answer.revolute[j] = plan.revolute(j);
+    for (int j = 0; j < kDof; ++j) answer.revolute[j] = plan->revolute(j);
     dhkin::Branches branches;
-    {
+    // solve_pose: the direct path, else the pipeline (which can take long: the GIL is released)
+    if (!dhkin::direct_branches(*plan, targets, T.data(), seed_q, tolerance, branches,
+                                answer.info)) {
       nb::gil_scoped_release release;
-      dhkin::solve_pose(plan, targets, T.data(), seed_q, tolerance, branches, answer.info);
-      if (answer.info.status == dhkin::kUsable) {
-        answer.solutions.reserve(kBranches);
-        dhkin::expand(plan, targets, T.data(), seed_q, tolerance, copies, branches,
-                      [&](const dhkin::Solution& s) {
-                        answer.solutions.push_back(s);
-                        return true;
-                      });
-      }
+      dhkin::solve_branches(*plan, targets, T.data(), seed_q, tolerance, branches, answer.info);
+    }
+    if (answer.info.status == dhkin::kUsable) {
+      dhkin::expand(*plan, targets, T.data(), seed_q, tolerance, copies, branches,
+                    [&](const dhkin::Solution& s) {
+                      answer.add(s);
+                      return true;
+                    });
     }
     return answer;
   }
@@ -402,6 +428,35 @@ class ClosedForm {
       for (int k = 0; k < dhkin::kWhySize; ++k) why(i, k) = pose.why[k];
       write_info(pose, &info(i, 0));
     }
+  }
+
+  // N poses without copies (one solution per branch, its in-limit copy nearest the seed)
+  // straight into the result arrays q (N, 8, 6), valid, branch, flags (N, 8), errors (N, 8, 2),
+  // projection and dropped (N): expand(copies = false) after principal(), pose by pose, bit for
+  // bit. Slots without a solution are left as given. Returns (index of the first pose whose
+  // status is not usable or -1, its status, the most solutions of any pose); poses after a
+  // rejected one are not solved.
+  std::tuple<long, int, int> nearest(
+      Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
+      double tolerance, Input<double, nb::shape<2, 4, 4>> frames,
+      Output<double, nb::shape<-1, kBranches, kDof>> q, Output<bool, nb::shape<-1, kBranches>> valid,
+      Output<std::int16_t, nb::shape<-1, kBranches>> branch,
+      Output<std::uint8_t, nb::shape<-1, kBranches>> flags,
+      Output<double, nb::shape<-1, kBranches, 2>> errors, Output<double, nb::ndim<1>> projection,
+      Output<std::int64_t, nb::ndim<1>> dropped) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {q.shape(0), valid.shape(0), branch.shape(0), flags.shape(0),
+                                   errors.shape(0), projection.shape(0), dropped.shape(0)});
+    const dhkin::TargetFrames target = target_frames(frames);
+    dhkin::Plan storage;
+    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    const dhkin::NearestOutputs out{q.data(), valid.data(), branch.data(), flags.data(),
+                                    errors.data(), projection.data(), dropped.data()};
+    nb::gil_scoped_release release;
+    const dhkin::BatchReport report =
+        dhkin::solve_nearest(plan, target, targets.data(), n, seeds.data(),
+                             seeds.shape(0) == 1 ? 0 : kDof, tolerance, out);
+    return {report.rejected, report.status, report.width};
   }
 
   // Whether the direct path answers each of N poses (the rest take the full pipeline); with
@@ -501,6 +556,8 @@ class ClosedForm {
   }
 
   dhkin::ClosedFormSolver solver_;
+  dhkin::Plan unused_;                // plan_for's storage for the default frames: never written
+  const dhkin::Plan* default_plan_;   // the plan of the table's own base and tool
 };
 
 // ---- chains ----------------------------------------------------------------------------------
@@ -606,6 +663,7 @@ NB_MODULE(_core, m) {
 
   nb::class_<Answer>(m, "Answer")
       .def_prop_ro("count", &Answer::count)
+      .def_prop_ro("found", &Answer::found)
       .def_prop_ro("status", [](const Answer& a) { return a.info.status; })
       .def_prop_ro("projection", [](const Answer& a) { return a.info.projection; })
       .def_prop_ro("candidates", [](const Answer& a) { return a.info.candidates; })
@@ -627,6 +685,8 @@ NB_MODULE(_core, m) {
       .def("principal", &ClosedForm::principal, "targets"_a, "seeds"_a, "tolerance"_a,
            "frames"_a, "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "totals"_a, "why"_a,
            "info"_a, "direct"_a = true)
+      .def("nearest", &ClosedForm::nearest, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,
+           "q"_a, "valid"_a, "branch"_a, "flags"_a, "errors"_a, "projection"_a, "dropped"_a)
       .def("direct_answers", &ClosedForm::direct_answers, "targets"_a, "seeds"_a,
            "tolerance"_a, "frames"_a, "answered"_a)
       .def("expand", &ClosedForm::expand, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,

@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from dhkin.cli import main
 from dhkin.validators import run_check_urdf
 from dhkin.vendors import vendor_dir
 
-from .conftest import REFERENCE_URDFS, REPO
+from .conftest import PER_ROBOT_BUILTINS, REFERENCE_URDFS, REPO
 
 
 def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
@@ -38,11 +39,32 @@ def test_console_script_is_installed() -> None:
         assert command in result.stdout
 
 
-def test_robots_lists_every_builtin(capsys) -> None:
+def test_robots_lists_every_builtin_by_vendor_and_family(capsys) -> None:
+    """Each built-in once, under its vendor's heading (dhkin.vendors) and, for the per-robot
+    sample (conftest.PER_ROBOT_BUILTINS), its IK family; the last line counts the real arms
+    (>= 50, issue 28) and the textbook ones."""
+    from dhkin.vendors import VENDOR_REFERENCES
+
     code, out, _ = run(capsys, "robots")
     assert code == 0
-    for name in dhkin.builtin_names():
-        assert name in out
+    heading, listed = "", {}
+    for line in out.splitlines()[:-1]:
+        if line.startswith("  "):
+            family, name = line.split()[:2]
+            listed[name] = (heading, family)
+        else:
+            heading = line.split(":")[0]
+    names = dhkin.builtin_names()
+    assert sorted(listed) == names
+    for name in names:
+        listed_vendor = VENDOR_REFERENCES[name].vendor if name in VENDOR_REFERENCES else ""
+        vendor = listed_vendor or "textbook arms (no vendor)"
+        assert listed[name][0] == vendor, name
+        if name in PER_ROBOT_BUILTINS:
+            assert listed[name][1] == dhkin.load(name).ik_family, name
+    real = sum(1 for vendor, _ in listed.values() if vendor != "textbook arms (no vendor)")
+    assert real >= 50
+    assert out.splitlines()[-1].startswith(f"{real} real arms of ")
 
 
 def test_export_writes_three_files_that_pass_check_urdf(capsys, tmp_path) -> None:
@@ -371,7 +393,7 @@ def test_check_prints_one_line_per_robot_and_writes_every_figure(capsys, tmp_pat
     check (the validation's counts and residuals among them)."""
     path = tmp_path / "check.json"
     code, out, _ = run(capsys, "check", "planar_3r", "ur5", "--ik-poses", "30",
-                       "--vendor-poses", "20", "--json", str(path))
+                       "--vendor-poses", "20", "--json", str(path), "--jobs", "2")
     assert code == 0, out
     lines = out.splitlines()
     assert lines[0].split() == ["robot", "IK", "family", "verdict", "worst", "residual",
@@ -396,6 +418,24 @@ def test_check_prints_one_line_per_robot_and_writes_every_figure(capsys, tmp_pat
     assert data["robots"][0]["checks"]["vendor"] is None  # does not apply: no vendor file
     code, _, err = run(capsys, "check", "planar_3r", "--json", str(path))
     assert code == 2 and "--force" in err  # an existing file with other content stays
+    # --jobs 2 (above: a worker process per robot) and --jobs 1 (one by one in this process)
+    # give the same lines and figures; only the seconds differ.
+    one_by_one = tmp_path / "one_by_one.json"
+    code, out_1, _ = run(capsys, "check", "planar_3r", "ur5", "--ik-poses", "30",
+                         "--vendor-poses", "20", "--json", str(one_by_one), "--jobs", "1")
+    assert code == 0
+    assert [line.split()[:5] for line in out_1.splitlines()[2:4]] \
+        == [line.split()[:5] for line in lines[2:4]]
+    assert _without_seconds(json.loads(one_by_one.read_text())) == _without_seconds(data)
+
+
+def _without_seconds(data: Any) -> Any:
+    """``data`` (JSON) without its "seconds" entries, at any depth."""
+    if isinstance(data, dict):
+        return {key: _without_seconds(value) for key, value in data.items() if key != "seconds"}
+    if isinstance(data, list):
+        return [_without_seconds(value) for value in data]
+    return data
 
 
 def test_check_without_the_vendor_file_fails_its_columns(capsys, tmp_path) -> None:

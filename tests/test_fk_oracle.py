@@ -1,9 +1,13 @@
 """Own numpy FK equals Pinocchio FK on the URDF generated through xacro, to 1e-12, every frame.
 
-Per built-in robot: 10^4 joint vectors drawn uniformly within the limits (fixed seed), every
-combination of the special angles 0, +-pi/2, +-pi that lies within the limits (prismatic joints:
-lower, middle, upper), and the lower and upper limit vectors. For each, every frame of the
-generated URDF is compared: ``base_link``, ``base``, each joint's link, ``flange`` and ``tool0``.
+Per built-in robot (the package arms: a sample, conftest.PER_ROBOT_BUILTINS): 10^4 joint vectors
+drawn uniformly within the limits (fixed seed), every combination of the special angles 0,
++-pi/2, +-pi that lies within the limits (a joint whose range holds fewer than three of them,
+like a vendor's 1.5707 that stops just short of pi/2: its limits too; prismatic joints: lower,
+middle, upper), and the lower and upper limit vectors. For each, every frame of the generated
+URDF is compared: ``base_link``, ``base``, each joint's link, ``flange`` and ``tool0``. The other
+package arms: the same comparison on 500 uniform joint vectors and each joint at each of its
+special values.
 
 The expected link frames follow urdf.py's definitions, derived here from the DH frames of
 :meth:`DHTable.fk_frames` (F_0 = base, F_i = F_{i-1} A_i):
@@ -29,24 +33,49 @@ from numpy.typing import NDArray
 import dhkin
 from dhkin.dh import DHTable
 from dhkin.transforms import pose_error
+from dhkin.vendors import PACKAGE_ARMS
 
-ROBOTS = dhkin.builtin_names()
+from .conftest import PER_ROBOT_BUILTINS
+
+ROBOTS = PER_ROBOT_BUILTINS
 N_RANDOM = 10_000
 TOLERANCE = 1e-12  # m and rad
 SPECIAL_ANGLES = (0.0, math.pi / 2, -math.pi / 2, math.pi, -math.pi)
 
 
-def special_grid(table: DHTable) -> NDArray[np.float64]:
-    """Every combination of special joint values within the limits, plus both limit vectors."""
+def special_values(table: DHTable) -> list[list[float]]:
+    """Per joint, its special values within the limits: the special angles (a revolute joint
+    whose range holds fewer than three of them takes its limits too), or a prismatic joint's
+    lower, middle and upper values."""
     per_joint = []
     for joint in table.joints:
         if joint.is_revolute:
             values = [v for v in SPECIAL_ANGLES if joint.lower <= v <= joint.upper]
+            if len(values) < 3:
+                values = sorted({*values, joint.lower, joint.upper})
         else:
             values = [joint.lower, 0.5 * (joint.lower + joint.upper), joint.upper]
         per_joint.append(values)
-    grid = np.array(list(itertools.product(*per_joint)), dtype=float)
+    return per_joint
+
+
+def special_grid(table: DHTable) -> NDArray[np.float64]:
+    """Every combination of special joint values (special_values), plus both limit vectors."""
+    grid = np.array(list(itertools.product(*special_values(table))), dtype=float)
     return np.vstack([grid, table.lower, table.upper])
+
+
+def special_rows(table: DHTable) -> NDArray[np.float64]:
+    """Each joint at each of its special values, the others at 0 (or the nearest limit), plus
+    both limit vectors: the special values one joint at a time instead of every combination."""
+    home = np.clip(np.zeros(table.dof), table.lower, table.upper)
+    rows = [home]
+    for i, values in enumerate(special_values(table)):
+        for value in values:
+            row = home.copy()
+            row[i] = value
+            rows.append(row)
+    return np.vstack([*rows, table.lower, table.upper])
 
 
 def expected_frames(table: DHTable, Q: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
@@ -96,13 +125,33 @@ def pinocchio_frames(robot: dhkin.Robot, Q: NDArray[np.float64],
     return {name: out[j] for j, name in enumerate(names)}
 
 
+def sample(name: str, n_random: int, every_combination: bool = True) -> Sampled:
+    """``n_random`` uniform joint vectors (seeded by the name), then the special grid (or, not
+    ``every_combination``, the special values one joint at a time)."""
+    robot = dhkin.load(name)
+    rng = np.random.default_rng(zlib.crc32(robot.name.encode()))
+    special = special_grid(robot.table) if every_combination else special_rows(robot.table)
+    Q = np.vstack([robot.table.random_q(n_random, rng), special])
+    names = ["base_link", "base", *[j.link for j in robot.table.joints], "flange", "tool0"]
+    return Sampled(robot, Q, n_random, pinocchio_frames(robot, Q, names))
+
+
 @pytest.fixture(scope="module", params=ROBOTS)
 def sampled(request: pytest.FixtureRequest) -> Sampled:
-    robot = dhkin.load(request.param)
-    rng = np.random.default_rng(zlib.crc32(robot.name.encode()))
-    Q = np.vstack([robot.table.random_q(N_RANDOM, rng), special_grid(robot.table)])
-    names = ["base_link", "base", *[j.link for j in robot.table.joints], "flange", "tool0"]
-    return Sampled(robot, Q, N_RANDOM, pinocchio_frames(robot, Q, names))
+    return sample(request.param, N_RANDOM)
+
+
+def test_every_package_arm_fk_equals_pinocchio_in_every_frame() -> None:
+    """The package arms outside ROBOTS, leaner: 500 uniform joint vectors and each joint at each
+    of its special values, every frame of the generated URDF to 1e-12."""
+    others = [name for name in PACKAGE_ARMS if name not in ROBOTS]
+    assert len(others) == len(PACKAGE_ARMS) - 7
+    for name in others:
+        sampled = sample(name, 500, every_combination=False)
+        assert len(sampled.q) - 500 >= 1 + 3 * sampled.robot.dof + 2
+        for frame, T in expected_frames(sampled.robot.table, sampled.q).items():
+            position, rotation = pose_error(T, sampled.pinocchio[frame])
+            assert max(position.max(), rotation.max()) <= TOLERANCE, (name, frame)
 
 
 def test_own_fk_equals_pinocchio_tool0(sampled: Sampled) -> None:

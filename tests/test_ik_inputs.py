@@ -216,17 +216,10 @@ BAND_EDGES = {
 
 @pytest.mark.parametrize("inside", [True, False])
 @pytest.mark.parametrize("edge", sorted(BAND_EDGES))
-def test_band_edge(edge: str, inside: bool, request: pytest.FixtureRequest) -> None:
+def test_band_edge(edge: str, inside: bool) -> None:
     """alpha2 (axes 2 and 3 parallel) or a5 (axes 5 and 6 meet) off by just under / over the
     band: refined and exact inside; beyond it no family, and the general 6R solver answers
     (every solution, the pose's q among them)."""
-    if edge == "length" and not inside:
-        # Known defect of branch i26 (issue 26), kept visible: at q = 0 (stretched and wrist
-        # singular at once) the general 6R solver returns 17 roots, all flagged singular, the
-        # nearest 0.78 rad from q = 0 even when seeded with it (main: 8 roots, q among them).
-        request.applymarker(pytest.mark.xfail(strict=True, reason=(
-            "i26: the seed's member of a singular root is not reached at the doubly singular "
-            "q = 0 of the UR5 with a5 beyond the band (issue 26, open)")))
     change, message, seed = BAND_EDGES[edge]
     table = _ur5_with(**change(0.95 if inside else 1.05))
     if inside:

@@ -10,6 +10,7 @@ Bad descriptions give URDFErrors that name the file, and the CLI writes nothing 
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +53,14 @@ COMPARE_SAMPLES = 1000
 
 
 def test_every_reference_urdf_is_covered() -> None:
-    assert sorted(p.name for p in REFERENCE_URDFS.glob("*.urdf")) == sorted(VENDOR_IMPORTS)
+    """Each vendor URDF is imported here, but the package arms' expansions (their xacros import
+    in tests/test_vendor_packages.py, and scripts/import_vendor_tables.py --check, below,
+    proves each file is its xacro's expansion)."""
+    from dhkin.vendors import PACKAGE_ARMS
+
+    expansions = {f"{name}.urdf" for name in PACKAGE_ARMS}
+    assert sorted(p.name for p in REFERENCE_URDFS.glob("*.urdf")
+                  if p.name not in expansions) == sorted(VENDOR_IMPORTS)
 
 
 def _description_limits(path: Path, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -397,16 +405,29 @@ def test_imported_builtins_equal_a_fresh_import() -> None:
                              "--check", "--reference-dir", str(REFERENCE_URDFS)],
                             capture_output=True, text=True, check=False)
     assert result.returncode == 0, result.stdout + result.stderr
-    assert "0 imported table(s) stale" in result.stdout
+    assert "0 imported file(s) stale" in result.stdout
 
 
 def test_imported_builtins_cite_their_source() -> None:
-    from dhkin.vendors import IMPORTED, VENDOR_REFERENCES
+    """A table imported from a vendor URDF cites it and its upstream; one imported from a
+    support package cites the package's xacro, its upstream repository @ commit and the
+    expansion shipped beside the other vendor URDFs."""
+    from dhkin.vendors import IMPORTED, PACKAGE_ARMS, VENDOR_REFERENCES
 
     assert set(IMPORTED) <= set(dhkin.builtin_names())
+    assert set(PACKAGE_ARMS) <= set(IMPORTED)
     for name in IMPORTED:
         table = dhkin.load(name).table
         vendor = VENDOR_REFERENCES[name]
-        assert f"robots/vendor/{vendor.file} ({vendor.base} -> {vendor.tip})" in table.source
-        assert "Upstream (the file's first comment): github.com/" in table.source
-        assert VENDOR_IMPORTS[vendor.file][:2] == (vendor.base, vendor.tip)
+        arm = PACKAGE_ARMS.get(name)
+        if arm is None:
+            assert f"robots/vendor/{vendor.file} ({vendor.base} -> {vendor.tip})" \
+                in table.source
+            assert "Upstream (the file's first comment): github.com/" in table.source
+            assert VENDOR_IMPORTS[vendor.file][:2] == (vendor.base, vendor.tip)
+            continue
+        assert (f"robots/vendor/packages/{arm.package}/urdf/{arm.xacro} (base_link -> "
+                f"{arm.tip})") in table.source
+        assert re.search(r"Upstream: github\.com/ros-industrial/\w+ @ [0-9a-f]{40}, package "
+                         + arm.package, table.source), name
+        assert f"Its expansion ships as robots/vendor/{vendor.file}." in table.source

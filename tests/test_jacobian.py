@@ -25,9 +25,9 @@ from numpy.typing import NDArray
 import dhkin
 from dhkin.reference import Reference
 
-from .conftest import DATA, REFERENCE_URDFS
+from .conftest import DATA, PER_ROBOT_BUILTINS, REFERENCE_URDFS
 
-ROBOTS = dhkin.builtin_names()
+ROBOTS = PER_ROBOT_BUILTINS  # a sample of the package arms (see conftest)
 SIX_AXIS = [name for name in ROBOTS if dhkin.load(name).dof == 6]
 CONVENTIONS = ("local", "world", "local_world_aligned")
 STEP = 1e-3

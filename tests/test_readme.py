@@ -23,3 +23,22 @@ def test_ci_runs_the_readme_test_command() -> None:
     ci_lines = [line for line in (REPO / ".ci" / "run").read_text().splitlines()
                 if line and not line.startswith("#")]
     assert ci_lines[-1] == _readme_commands()[1]
+
+
+def test_readme_counts_the_builtin_robots() -> None:
+    """The README's count of built-in robots, real arms, vendors' package arms and textbook arms
+    is the library's (dhkin.vendors: a real arm has a vendor reference naming its maker)."""
+    import re
+
+    import dhkin
+    from dhkin.vendors import PACKAGE_ARMS, VENDOR_REFERENCES
+
+    text = " ".join((REPO / "README.md").read_text(encoding="utf-8").split())
+    counts = re.search(r"(\d+) robots are built in .*?: (\d+) real arms of .*? \((\d+) of them "
+                       r"imported from the ROS-Industrial support packages\) and (\d+) textbook",
+                       text)
+    assert counts is not None
+    names = dhkin.builtin_names()
+    real = [name for name in names if name in VENDOR_REFERENCES and VENDOR_REFERENCES[name].vendor]
+    assert tuple(int(count) for count in counts.groups()) \
+        == (len(names), len(real), len(PACKAGE_ARMS), len(names) - len(real))

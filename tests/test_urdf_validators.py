@@ -30,9 +30,11 @@ import dhkin
 from dhkin.transforms import pose_error
 from dhkin.validators import load_in_pinocchio, load_in_yourdfpy, run_check_urdf
 
-from .conftest import DATA
+from .conftest import DATA, PER_ROBOT_BUILTINS
 
-TABLES = [*dhkin.builtin_names(), "custom_arm_modified", "custom_arm_prismatic"]
+#: The built-ins (a sample of the package arms: conftest.PER_ROBOT_BUILTINS; `dhkin check --all`
+#: runs the three validators on every one) and two custom tables.
+TABLES = [*PER_ROBOT_BUILTINS, "custom_arm_modified", "custom_arm_prismatic"]
 FIXED_FRAMES = ("base_link", "base", "flange", "tool0")
 
 

@@ -1,15 +1,19 @@
 // Angles: sine and cosine together, atan2, wrapping to (-pi, pi].
 //
 // sincos and atan2 are written out (no C library call, no branch on the quadrant) because the IK
-// evaluates hundreds of them per pose and the compiler can then inline and vectorise them.
-// Accuracy: within ~2 ulp (sincos measured 2.3e-16 on [-8, 8], atan2 4.5e-16; the tests measure
-// them against numpy). Inputs outside their range (|x| >= 2^19, infinities, NaN, zeros for atan2)
-// go to the C library.
+// evaluates hundreds of them per pose and the compiler can then inline and vectorise them. Each
+// is written once for a lane type V (simd.hpp): V = double for one value, V = Lanes for kLanes
+// at once, with the same bits in each lane as for the double. Accuracy: within ~2 ulp (sincos
+// measured 2.3e-16 on [-8, 8], atan2 4.5e-16; the tests measure them against numpy). Inputs
+// outside their range (|x| >= 2^19, infinities, NaN, zeros for atan2) go to the C library, one
+// lane at a time.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+
+#include "dhkin/simd.hpp"
 
 namespace dhkin {
 
@@ -17,9 +21,20 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoPi = 2.0 * kPi;
 constexpr double kHalfPi = 0.5 * kPi;
 
-struct SinCos {
-  double s, c;
+template <class V>
+struct SinCosT {
+  V s, c;
 };
+using SinCos = SinCosT<double>;
+
+template <class V>
+inline SinCos lane(const SinCosT<V>& t, int l) {
+  return {lane(t.s, l), lane(t.c, l)};
+}
+template <class V>
+inline void set_lane(SinCosT<V>& t, int l, const SinCos& x) {
+  set_lane(t.s, l, x.s), set_lane(t.c, l, x.c);
+}
 
 namespace elementary {
 
@@ -55,78 +70,144 @@ constexpr double kAtanTable[9] = {0.0,
 constexpr double kA3 = -1.0 / 3.0, kA5 = 1.0 / 5.0, kA7 = -1.0 / 7.0, kA9 = 1.0 / 9.0,
                  kA11 = -1.0 / 11.0, kA13 = 1.0 / 13.0, kA15 = -1.0 / 15.0;
 
-// (sin x, cos x) for |x| < 2^19: reduction by multiples of pi/2, Taylor polynomials on
-// [-pi/4, pi/4], the quadrant by selects, not branches (vectorisable).
-inline SinCos sincos_reduced(double x) {
-  const double shifted = x * kTwoOverPi + kRounder;
-  const double k = shifted - kRounder;
+// The low bits of x + kRounder (x rounded to an integer, |x| < 2^51), per lane.
+inline std::int64_t rounded_bits(double shifted) {
   std::int64_t bits;
   std::memcpy(&bits, &shifted, sizeof bits);
-  const double r = (x - k * kHalfPiHead) - k * kHalfPiTail;
-  const double r2 = r * r;
-  const double s =
+  return bits;
+}
+DHKIN_INLINE LaneBits rounded_bits(Lanes shifted) { return bits_of(shifted); }
+
+// atan(k / 8) for the integer k in the low bits of `bits` (lanes outside 0..8 read entry 8;
+// their result is not used).
+inline double atan_table(std::int64_t bits) {
+  const std::int64_t k = bits & 15;
+  return kAtanTable[k < 8 ? k : 8];
+}
+DHKIN_INLINE Lanes atan_table(const LaneBits& bits) {
+  alignas(64) std::int64_t index[kLanes];
+  alignas(64) double out[kLanes];
+  std::memcpy(index, &bits.v, sizeof index);
+  for (int l = 0; l < kLanes; ++l) out[l] = atan_table(index[l]);
+  return Lanes::load(out);
+}
+
+// (sin x, cos x) for |x| < 2^19: reduction by multiples of pi/2, Taylor polynomials on
+// [-pi/4, pi/4], the quadrant by selects, not branches (vectorisable).
+template <class V>
+DHKIN_INLINE SinCosT<V> sincos_reduced(V x) {
+  const V shifted = x * kTwoOverPi + kRounder;
+  const V k = shifted - kRounder;
+  const auto quadrant = rounded_bits(shifted);  // k mod 4 in the low bits
+  const V r = (x - k * kHalfPiHead) - k * kHalfPiTail;
+  const V r2 = r * r;
+  const V s =
       r + r * r2 *
               (kS3 + r2 * (kS5 + r2 * (kS7 + r2 * (kS9 + r2 * (kS11 + r2 * (kS13 + r2 * (kS15 + r2 * kS17)))))));
-  const double c =
+  const V c =
       1.0 - 0.5 * r2 +
       r2 * r2 *
           (kC4 + r2 * (kC6 + r2 * (kC8 + r2 * (kC10 + r2 * (kC12 + r2 * (kC14 + r2 * (kC16 + r2 * kC18)))))));
-  const std::int64_t quadrant = bits;  // k mod 4 in the low bits
-  const bool odd = (quadrant & 1) != 0;
-  const double sine = odd ? c : s;
-  const double cosine = odd ? s : c;
-  const double sine_sign = (quadrant & 2) ? -1.0 : 1.0;
-  const double cosine_sign = ((quadrant + 1) & 2) ? -1.0 : 1.0;
+  const auto odd = (quadrant & 1) != 0;
+  const V sine = select(odd, c, s);
+  const V cosine = select(odd, s, c);
+  const V sine_sign = select((quadrant & 2) != 0, V(-1.0), V(1.0));
+  const V cosine_sign = select(((quadrant + 1) & 2) != 0, V(-1.0), V(1.0));
   return {sine * sine_sign, cosine * cosine_sign};
 }
 
 }  // namespace elementary
 
 // (sin x, cos x), each within ~2 ulp; beyond 2^19, NaN and infinities: the C library.
-inline SinCos sincos(double x) {
-  if (!(std::abs(x) < elementary::kReductionLimit)) return {std::sin(x), std::cos(x)};
-  return elementary::sincos_reduced(x);
+template <class V>
+DHKIN_INLINE SinCosT<V> sincos(V x) {
+  SinCosT<V> out = elementary::sincos_reduced(x);
+  for_each_lane(outside(x, elementary::kReductionLimit), [&](int l) {
+    set_lane(out.s, l, std::sin(lane(x, l)));
+    set_lane(out.c, l, std::cos(lane(x, l)));
+  });
+  return out;
+}
+
+// sincos(-x) from t = sincos(x): (-sin x, cos x), the same bits sincos(-x) gives (the reduction
+// and both polynomials are symmetric, and so is the C library's).
+template <class V>
+DHKIN_INLINE SinCosT<V> negated(const SinCosT<V>& t) {
+  return {-t.s, t.c};
+}
+
+// |sin x| <= band for a band in (0, 1e-3], the same answer as abs(sincos(x).s) <= band without
+// the cosine: with x = k pi/2 + r, |sin x| is |sin r| for even k, else |cos r| > 0.7; and where
+// |r| > 2 band, |sin r| > band (sin r >= r (1 - r^2 / 6)), so the polynomial is evaluated only
+// where some lane is closer.
+template <class V>
+DHKIN_INLINE MaskOf<V> small_sine(V x, double band) {
+  using namespace elementary;
+  const V shifted = x * kTwoOverPi + kRounder;
+  const V k = shifted - kRounder;
+  const V r = (x - k * kHalfPiHead) - k * kHalfPiTail;
+  auto result = (rounded_bits(shifted) & 1) == 0 && abs(r) <= 2.0 * band;
+  if (any(result)) result = result && abs(sincos(x).s) <= band;
+  for_each_lane(outside(x, kReductionLimit),
+                [&](int l) { set_lane(result, l, std::fabs(std::sin(lane(x, l))) <= band); });
+  return result;
+}
+
+// atan2(y, x) <= limit for y, x >= 0 and a limit in (0, 1e-3]: the same answer, with atan2
+// evaluated only where some lane has y <= 2 limit x (elsewhere the angle is at least
+// atan(2 limit) > limit; NaN goes to atan2 as well).
+template <class V>
+DHKIN_INLINE MaskOf<V> small_angle(V y, V x, double limit) {
+  auto maybe = !(y > (2.0 * limit) * x);
+  if (any(maybe)) maybe = maybe && atan2(y, x) <= limit;
+  return maybe;
 }
 
 // atan2(y, x) within ~2 ulp, with the C library's values at zeros, signed zeros, infinities and
 // NaN (those inputs go to it). Reduction to t = min/max of |x|, |y| in [0, 1], then
 // atan(t) = atan(k/8) + atan((t - k/8) / (1 + t k/8)).
-inline double atan2(double y, double x) {
+template <class V>
+DHKIN_INLINE V atan2(V y, V x) {
   using namespace elementary;
-  const double ax = std::abs(x), ay = std::abs(y);
-  const double denominator = ay > ax ? ay : ax;
-  const double numerator = ay > ax ? ax : ay;
-  if (!(denominator > 0.0 && denominator < INFINITY && numerator == numerator)) {
-    return std::atan2(y, x);
-  }
-  const double t = numerator / denominator;
-  const double k = (t * 8.0 + kRounder) - kRounder;
-  const double centre = k * 0.125;
-  const double u = (t - centre) / (1.0 + t * centre);
-  const double u2 = u * u;
-  double a = kAtanTable[static_cast<int>(k)] +
-             (u + u * u2 * (kA3 + u2 * (kA5 + u2 * (kA7 + u2 * (kA9 + u2 * (kA11 + u2 * (kA13 + u2 * kA15)))))));
-  a = ay > ax ? kHalfPi - a : a;
-  a = x < 0.0 ? kPi - a : a;
-  return std::copysign(a, y);
+  const V ax = abs(x), ay = abs(y);
+  const auto steep = ay > ax;
+  const V denominator = select(steep, ay, ax);
+  const V numerator = select(steep, ax, ay);
+  const V t = numerator / denominator;
+  const V shifted = t * 8.0 + kRounder;
+  const V k = shifted - kRounder;
+  const V centre = k * 0.125;
+  const V u = (t - centre) / (1.0 + t * centre);
+  const V u2 = u * u;
+  V a = atan_table(rounded_bits(shifted)) +
+        (u + u * u2 * (kA3 + u2 * (kA5 + u2 * (kA7 + u2 * (kA9 + u2 * (kA11 + u2 * (kA13 + u2 * kA15)))))));
+  a = select(steep, kHalfPi - a, a);
+  a = select(x < 0.0, kPi - a, a);
+  a = copysign(a, y);
+  for_each_lane(!(denominator > 0.0 && denominator < INFINITY && numerator == numerator),
+                [&](int l) { set_lane(a, l, std::atan2(lane(y, l), lane(x, l))); });
+  return a;
 }
 
 // value wrapped to (-pi, pi] (-pi itself becomes pi): whole turns taken off by Cody and Waite's
 // reduction (k * 2pi's head is exact), beyond 2^19 by the C library's exact fmod.
-inline double wrap(double value) {
-  if (-kPi < value && value <= kPi) return value;
-  if (std::abs(value) < elementary::kReductionLimit) {
-    using namespace elementary;
-    const double k = (value * (0.25 * kTwoOverPi) + kRounder) - kRounder;  // value / 2pi, rounded
-    double r = (value - k * (4.0 * kHalfPiHead)) - k * (4.0 * kHalfPiTail);  // 2pi = 4 (pi/2)
-    if (r <= -kPi) r += kTwoPi;
-    if (r > kPi) r -= kTwoPi;
-    return r;
-  }
-  double r = std::fmod(kPi - value, kTwoPi);
-  if (r < 0.0) r += kTwoPi;
-  const double wrapped = kPi - r;
-  return wrapped <= -kPi ? wrapped + kTwoPi : wrapped;
+template <class V>
+DHKIN_INLINE V wrap(V value) {
+  using namespace elementary;
+  const auto inside = -kPi < value && value <= kPi;
+  if (all(inside)) return value;  // most values (the reduction below keeps them as they are)
+  const V k = (value * (0.25 * kTwoOverPi) + kRounder) - kRounder;  // value / 2pi, rounded
+  V r = (value - k * (4.0 * kHalfPiHead)) - k * (4.0 * kHalfPiTail);  // 2pi = 4 (pi/2)
+  r = select(r <= -kPi, r + kTwoPi, r);
+  r = select(r > kPi, r - kTwoPi, r);
+  r = select(inside, value, r);
+  for_each_lane(outside(value, kReductionLimit), [&](int l) {
+    double remainder = std::fmod(kPi - lane(value, l), kTwoPi);
+    if (remainder < 0.0) remainder += kTwoPi;
+    const double wrapped = kPi - remainder;
+    set_lane(r, l, wrapped <= -kPi ? wrapped + kTwoPi : wrapped);
+  });
+  return r;
 }
 
 // x reduced to [-pi, pi) by whole turns (a distance between two angles).

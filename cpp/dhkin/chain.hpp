@@ -36,7 +36,8 @@ struct ChainJoint {
   double offset = 0.0;
 
   // The DH variable (theta or d) at joint value q.
-  double motion(double q) const { return direction * q + offset; }
+  template <class V>
+  V motion(V q) const { return direction * q + offset; }
 };
 
 struct Chain {
@@ -47,26 +48,134 @@ struct Chain {
 };
 
 // f = f * Z(v): the joint's motion.
-inline void apply_motion(Frame& f, const ChainJoint& joint, double q) {
-  const double v = joint.motion(q);
+template <class V>
+DHKIN_INLINE void apply_motion(FrameT<V>& f, const ChainJoint& joint, V q) {
+  const V v = joint.motion(q);
   if (joint.revolute) {
-    const SinCos t = sincos(v);
+    const SinCosT<V> t = sincos(v);
     turn_about_z(f, t.c, t.s);
   } else {
     slide_along_z(f, v);
   }
 }
 
-// T(q), DH frame 0 -> DH frame n; q has chain.dof() values.
-inline Frame fk(const Chain& chain, const double* q) {
-  Frame state = chain.joints[0].before;
+// Where a constant frame P has zeros. A DH table's frames turn about x (P.R = Rx(alpha): row 0
+// and column 0 are those of the identity), often by a right angle (whose cosine 6e-17 stays a
+// factor), and move along one or two axes.
+struct ConstantShape {
+  enum Kind { kGeneral, kIdentity, kTurnX };
+  Kind kind = kGeneral;
+  double turn[2][2] = {{1.0, 0.0}, {0.0, 1.0}};  // P.R[1..2][1..2] of a turn about x
+  int moves = 0;                                 // nonzero entries of P.p
+  int axis[3] = {0, 0, 0};                       // their indices, in order
+  double move[3] = {0.0, 0.0, 0.0};              // and values
+
+  ConstantShape() = default;
+  explicit ConstantShape(const Frame& P) {
+    for (int k = 0; k < 3; ++k) {
+      if (P.p[k] != 0.0) axis[moves] = k, move[moves++] = P.p[k];
+    }
+    const bool about_x = P.R[0][0] == 1.0 && P.R[0][1] == 0.0 && P.R[0][2] == 0.0 &&
+                         P.R[1][0] == 0.0 && P.R[2][0] == 0.0;
+    if (!about_x) return;
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 2; ++c) turn[r][c] = P.R[r + 1][c + 1];
+    }
+    const bool identity = P.R[1][1] == 1.0 && P.R[1][2] == 0.0 && P.R[2][1] == 0.0 &&
+                          P.R[2][2] == 1.0;
+    kind = identity ? kIdentity : kTurnX;
+  }
+};
+
+// state = state * P for the constant frame P of this shape: operator* of frame.hpp without the
+// terms whose factor of P is zero. The same sums in the same order, so the same values short of
+// the sign of a zero.
+template <class V>
+DHKIN_INLINE void times_constant(FrameT<V>& state, const Frame& P, const ConstantShape& shape) {
+  if (shape.kind == ConstantShape::kGeneral) {
+    state = state * P;
+    return;
+  }
+  for (int r = 0; r < 3; ++r) {
+    V* row = state.R[r];
+    if (shape.moves == 1) {
+      state.p[r] = row[shape.axis[0]] * shape.move[0] + state.p[r];
+    } else if (shape.moves > 1) {
+      V sum = row[shape.axis[0]] * shape.move[0];
+      for (int t = 1; t < shape.moves; ++t) sum = sum + row[shape.axis[t]] * shape.move[t];
+      state.p[r] = sum + state.p[r];
+    }
+    if (shape.kind == ConstantShape::kTurnX) {
+      const V a1 = row[1], a2 = row[2];
+      row[1] = a1 * shape.turn[0][0] + a2 * shape.turn[1][0];
+      row[2] = a1 * shape.turn[0][1] + a2 * shape.turn[1][1];
+    }
+  }
+}
+
+// The shapes of the constant frames of a chain of at most kDof joints.
+struct ChainShape {
+  ConstantShape before[kDof];
+  ConstantShape tail;
+
+  explicit ChainShape(const Chain& chain) : tail(chain.tail) {
+    for (int j = 0; j < chain.dof() && j < kDof; ++j) before[j] = ConstantShape(chain.joints[j].before);
+  }
+};
+
+// The joints' motions at q: each revolute joint's sine and cosine, each DH variable.
+template <class V>
+struct JointMotions {
+  SinCosT<V> turn[kDof];
+  V variable[kDof];
+};
+
+// Joint j's motion at value q.
+template <class V>
+DHKIN_INLINE void joint_motion(const Chain& chain, int j, V q, JointMotions<V>& out) {
+  const ChainJoint& joint = chain.joints[j];
+  out.variable[j] = joint.motion(q);
+  if (joint.revolute) out.turn[j] = sincos(out.variable[j]);
+}
+
+template <class V>
+DHKIN_INLINE void joint_motions(const Chain& chain, const V* q, JointMotions<V>& out) {
+  for (int j = 0; j < chain.dof(); ++j) joint_motion(chain, j, q[j], out);
+}
+
+// T(q) of a chain of at most kDof joints from its motions at q.
+template <class V>
+DHKIN_INLINE FrameT<V> chain_frame(const Chain& chain, const ChainShape& shape,
+                                   const JointMotions<V>& motions) {
+  FrameT<V> state = broadcast<V>(chain.joints[0].before);
+  for (int j = 0; j < chain.dof(); ++j) {
+    if (j > 0) times_constant(state, chain.joints[j].before, shape.before[j]);
+    if (chain.joints[j].revolute) {
+      turn_about_z(state, motions.turn[j].c, motions.turn[j].s);
+    } else {
+      slide_along_z(state, motions.variable[j]);
+    }
+  }
+  times_constant(state, chain.tail, shape.tail);
+  return state;
+}
+
+// T(q), DH frame 0 -> DH frame n; q has chain.dof() values (per lane: kLanes joint vectors).
+template <class V>
+inline FrameT<V> fk(const Chain& chain, const V* q) {
+  if (chain.dof() <= kDof) {
+    JointMotions<V> motions;
+    joint_motions(chain, q, motions);
+    return chain_frame(chain, ChainShape(chain), motions);
+  }
+  FrameT<V> state = broadcast<V>(chain.joints[0].before);
   apply_motion(state, chain.joints[0], q[0]);
-  const int n = chain.dof();
-  for (int j = 1; j < n; ++j) {
-    state = state * chain.joints[j].before;
+  for (int j = 1; j < chain.dof(); ++j) {
+    times_constant(state, chain.joints[j].before, ConstantShape(chain.joints[j].before));
     apply_motion(state, chain.joints[j], q[j]);
   }
-  return state * chain.tail;
+  times_constant(state, chain.tail, ConstantShape(chain.tail));
+  return state;
 }
 
 // The frame each joint moves about (before its motion), frames[j] for j < n, and T(q) in
@@ -82,37 +191,49 @@ inline void fk_frames(const Chain& chain, const double* q, Frame* frames) {
   frames[n] = state * chain.tail;
 }
 
-// Position (m) and rotation (rad) error of a frame against a target.
-struct PoseError {
-  double position = 0.0;
-  double rotation = 0.0;
+// Position (m) and rotation (rad) error of a frame against a target (per lane).
+template <class V>
+struct PoseErrorT {
+  V position{};
+  V rotation{};
 
-  double largest() const { return position > rotation ? position : rotation; }
+  V largest() const { return select(position > rotation, position, rotation); }
   // Both errors at most `tolerance` (false for NaN).
-  bool within(double tolerance) const { return position <= tolerance && rotation <= tolerance; }
+  MaskOf<V> within(double tolerance) const {
+    return position <= tolerance && rotation <= tolerance;
+  }
 };
+using PoseError = PoseErrorT<double>;
+
+// Lane l of errors of lanes.
+inline PoseError lane(const PoseErrorT<Lanes>& e, int l) {
+  return {lane(e.position, l), lane(e.rotation, l)};
+}
 
 // The error of `state` against `target`: |p - p_t| and the angle of R^T R_t, computed as
 // atan2(s, c) with s = |vee(E - E^T)| / 2, c = (trace E - 1) / 2, E = R^T R_t.
-inline PoseError pose_error(const Frame& state, const Frame& target) {
-  double e[3][3];
+template <class V, class W>
+DHKIN_INLINE PoseErrorT<Product<V, W>> pose_error(const FrameT<V>& state, const FrameT<W>& target) {
+  using T = Product<V, W>;
+  T e[3][3];
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
       e[r][c] = state.R[0][r] * target.R[0][c] + state.R[1][r] * target.R[1][c] +
                 state.R[2][r] * target.R[2][c];
     }
   }
-  const double dx = state.p[0] - target.p[0], dy = state.p[1] - target.p[1],
-               dz = state.p[2] - target.p[2];
-  const double s = 0.5 * std::sqrt((e[2][1] - e[1][2]) * (e[2][1] - e[1][2]) +
-                                    (e[0][2] - e[2][0]) * (e[0][2] - e[2][0]) +
-                                    (e[1][0] - e[0][1]) * (e[1][0] - e[0][1]));
-  const double c = 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0);
-  return {std::sqrt(dx * dx + dy * dy + dz * dz), atan2(s, c)};
+  const T dx = state.p[0] - target.p[0], dy = state.p[1] - target.p[1],
+          dz = state.p[2] - target.p[2];
+  const T s = 0.5 * sqrt((e[2][1] - e[1][2]) * (e[2][1] - e[1][2]) +
+                         (e[0][2] - e[2][0]) * (e[0][2] - e[2][0]) +
+                         (e[1][0] - e[0][1]) * (e[1][0] - e[0][1]));
+  const T c = 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0);
+  return {sqrt(dx * dx + dy * dy + dz * dz), atan2(s, c)};
 }
 
 // The error of T(q) against `target`.
-inline PoseError check(const Chain& chain, const double* q, const Frame& target) {
+template <class V, class W>
+inline PoseErrorT<Product<V, W>> check(const Chain& chain, const V* q, const FrameT<W>& target) {
   return pose_error(fk(chain, q), target);
 }
 

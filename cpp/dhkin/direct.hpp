@@ -25,6 +25,40 @@ struct PoseTargets {
   Frame T_at;  // T_dh followed by the TCP point: the target of the plan's chains
 };
 
+// The pose's status (a PoseStatus; the seed's too), and its rotation projected onto the nearest
+// rotation (`projection`: how far). False when the pose is not usable.
+inline bool projected_pose(const double* T, const Joints& seed, int& status, double& projection,
+                           Frame& projected) {
+  status = pose_status(T);
+  if (status != kUsable) return false;
+  for (double v : seed) {
+    if (!std::isfinite(v)) {
+      status = kBadSeed;
+      return false;
+    }
+  }
+  projected = projected_frame(T, projection);
+  return true;
+}
+
+// The targets of a projected pose (per lane for V = Lanes): TargetFrames::to_dh, then the TCP.
+template <class V>
+inline void targets_of(const TargetFrames& frames, const FrameT<V>& projected, FrameT<V>& T_dh,
+                       FrameT<V>& T_at) {
+  T_dh = frames.base_inverse * projected * frames.tool_inverse;
+  T_at = moved_to(T_dh, frames.tcp_point);
+}
+
+// Step 1 without the bookkeeping: the pose's status, the projection's size and the targets.
+// False when the pose is not usable.
+inline bool pose_targets(const TargetFrames& frames, const double* T, const Joints& seed,
+                         int& status, double& projection, PoseTargets& targets) {
+  Frame projected;
+  if (!projected_pose(T, seed, status, projection, projected)) return false;
+  targets_of(frames, projected, targets.T_dh, targets.T_at);
+  return true;
+}
+
 // Step 1: the pose and the seed checked (a rejection goes to info.status), the rotation
 // projected (info.projection) and the targets computed. False when the pose is not usable.
 inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints& seed,
@@ -33,18 +67,7 @@ inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints
   info.why.fill(NAN);
   branches.ok.fill(false);
   branches.flags.fill(0);
-  info.status = pose_status(T);
-  if (info.status != kUsable) return false;
-  for (double v : seed) {
-    if (!std::isfinite(v)) {
-      info.status = kBadSeed;
-      return false;
-    }
-  }
-  const Frame projected = projected_frame(T, info.projection);
-  targets.T_dh = frames.to_dh(projected);
-  targets.T_at = moved_to(targets.T_dh, frames.tcp_point);
-  return true;
+  return pose_targets(frames, T, seed, info.status, info.projection, targets);
 }
 
 // Steps 1-3 for a regular pose of an exact-family table; false (outputs undefined) for a pose

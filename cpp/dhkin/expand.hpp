@@ -49,21 +49,49 @@ long expand(const Plan& plan, const TargetFrames& frames, const double* T, const
   tolerance = plan.verification_tolerance(tolerance);
   bool have_target = false;
   Frame T_at;
+  const auto verified = [&](Solution& solution) {  // a copy verified again
+    if (!have_target) {
+      double moved;
+      T_at = moved_to(frames.to_dh(projected_frame(T, moved)), frames.tcp_point);
+      have_target = true;
+    }
+    solution.error = check(plan.chain, solution.q.data(), T_at);
+    return solution.error.within(tolerance);
+  };
   long count = 0;
+  if (!copies) {  // one copy per branch, the one nearest the seed: no mixed-radix loop
+    for (int b = 0; b < kBranches; ++b) {
+      if (!branches.ok[b]) continue;
+      const Joints& q = branches.q[b];
+      Solution solution;
+      bool exists = true, clipped = false;
+      for (int j = 0; j < kDof && exists; ++j) {
+        const bool revolute = plan.revolute(j);
+        long turn = 0;
+        exists = nearest_turn(plan.limits[j], revolute, q[j], slack, seed[j], turn);
+        const double shifted = revolute ? q[j] + kTwoPi * static_cast<double>(turn) : q[j];
+        solution.q[j] = placed(plan.limits[j], revolute, q[j], turn);
+        clipped = clipped || solution.q[j] != shifted;
+      }
+      if (!exists) continue;
+      solution.error = branches.errors[b];
+      const bool recheck = branches.errors[b].largest() > tolerance - kCopyMargin;
+      if ((clipped || recheck) && !verified(solution)) continue;
+      solution.branch = b;
+      solution.flags = branches.flags[b];
+      if (!emit(solution)) return -1;
+      ++count;
+    }
+    return count;
+  }
   std::array<long, kDof> first{}, counts{}, digits{};
   for (int b = 0; b < kBranches; ++b) {
     if (!branches.ok[b]) continue;
     const Joints& q = branches.q[b];
     long total = 1;
-    for (int j = 0; j < kDof; ++j) {
-      if (copies) {
-        const TurnRange range = turn_range(plan.limits[j], plan.revolute(j), q[j], slack);
-        first[j] = range.first, counts[j] = range.count;
-      } else {
-        long turn = 0;
-        const bool exists = nearest_turn(plan.limits[j], plan.revolute(j), q[j], slack, seed[j], turn);
-        first[j] = turn, counts[j] = exists ? 1 : 0;
-      }
+    for (int j = 0; j < kDof; ++j) {  // every in-limit copy
+      const TurnRange range = turn_range(plan.limits[j], plan.revolute(j), q[j], slack);
+      first[j] = range.first, counts[j] = range.count;
       total *= counts[j];
       digits[j] = 0;
     }
@@ -79,16 +107,7 @@ long expand(const Plan& plan, const TargetFrames& frames, const double* T, const
         clipped = clipped || solution.q[j] != shifted;
       }
       solution.error = branches.errors[b];
-      bool keep = true;
-      if (clipped || recheck) {
-        if (!have_target) {
-          double moved;
-          T_at = moved_to(frames.to_dh(projected_frame(T, moved)), frames.tcp_point);
-          have_target = true;
-        }
-        solution.error = check(plan.chain, solution.q.data(), T_at);
-        keep = solution.error.within(tolerance);
-      }
+      const bool keep = !(clipped || recheck) || verified(solution);
       if (keep) {
         solution.branch = b;
         solution.flags = branches.flags[b];

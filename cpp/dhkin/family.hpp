@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "dhkin/chain.hpp"
+#include "dhkin/simd.hpp"
 
 namespace dhkin {
 
@@ -18,34 +19,54 @@ constexpr int kBranches = 8;
 // Numbers an empty answer is explained with (see each family's `explain` in Python).
 constexpr int kWhySize = 6;
 
-struct Candidates {
-  std::array<Joints, kBranches> q{};
-  std::array<bool, kBranches> valid{};
-  std::array<std::uint8_t, kBranches> flags{};
-  std::array<std::uint8_t, kBranches> near{};
-  std::array<double, kWhySize> why{};
+// Joint values of one arm per lane.
+template <class V>
+using JointsT = std::array<V, kDof>;
+
+// The candidates of one target (V = double) or of kLanes targets (V = Lanes, one per lane).
+template <class V>
+struct CandidatesT {
+  std::array<JointsT<V>, kBranches> q{};
+  std::array<MaskOf<V>, kBranches> valid{};
+  std::array<BitsOf<V>, kBranches> flags{};
+  std::array<BitsOf<V>, kBranches> near{};
+  std::array<V, kWhySize> why{};
 
   // Candidates with any non-finite joint value are not valid.
   void drop_non_finite() {
     for (int b = 0; b < kBranches; ++b) {
-      for (int j = 0; j < kDof; ++j) {
-        if (!std::isfinite(q[b][j])) valid[b] = false;
-      }
+      for (int j = 0; j < kDof; ++j) valid[b] = valid[b] && abs(q[b][j]) < INFINITY;
     }
   }
 };
+using Candidates = CandidatesT<double>;
 
 // How a family's closed form is asked: `use_seed` (singularity bits) selects which free joints
 // come from the seed; within `seed_angle` (|sin| of the wrist angle) and `seed_length` (m) of a
 // singularity a joint counts as free; reach conditions violated by at most `clamp` (m) are
-// clamped onto their boundary.
-struct FamilyRequest {
-  const Joints* seed;
+// clamped onto their boundary. With `only_branch` >= 0 the seeded family member of that branch
+// alone is searched (the others' seeded candidates are left invalid); with `at_seed` it is the
+// member at the seed's free joint itself, not the one nearest the seed (the valley scan and the
+// limit search walk a family by its free joint).
+template <class V>
+struct FamilyRequestT {
+  const JointsT<V>* seed;
   int use_seed;
   double seed_angle;
   double seed_length;
   double clamp;
+  int only_branch = -1;
+  bool at_seed = false;
 };
+using FamilyRequest = FamilyRequestT<double>;
+
+// The request of lane l (its seed copied into `seed`).
+template <class V>
+inline FamilyRequest lane(const FamilyRequestT<V>& request, int l, Joints& seed) {
+  for (int j = 0; j < kDof; ++j) seed[j] = lane((*request.seed)[j], l);
+  return {&seed,         request.use_seed,    request.seed_angle, request.seed_length,
+          request.clamp, request.only_branch, request.at_seed};
+}
 
 inline bool finite(const Joints& q) {
   for (double v : q) {

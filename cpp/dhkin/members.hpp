@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "dhkin/golden.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/settle.hpp"
 
@@ -61,22 +62,9 @@ inline int nearest_member(const Plan& plan, const Frame& T, const Joints& seed, 
     if (value < best) best_t = t, best = value;
   }
   if (best == INFINITY) return -1;
-  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
-  double low = best_t - kStep, high = best_t + kStep;
-  double a = high - golden * (high - low), c = low + golden * (high - low);
-  double value_a = distance(a), value_c = distance(c);
-  while (high - low > kPrecision) {
-    if (value_a <= value_c) {
-      high = c, c = a, value_c = value_a;
-      a = high - golden * (high - low);
-      value_a = distance(a);
-    } else {
-      low = a, a = c, value_a = value_c;
-      c = low + golden * (high - low);
-      value_c = distance(c);
-    }
-  }
-  if (distance(0.5 * (low + high)) > best) distance(best_t);
+  const double middle = golden_section(best_t - kStep, best_t + kStep, kPrecision, distance,
+                                       [](double left, double right) { return left <= right; });
+  if (distance(middle) > best) distance(best_t);
   candidate = found.q[b];
   return found.flags[b];
 }
@@ -136,7 +124,8 @@ inline PoseError member_in_limits(const Plan& plan, const Frame& T, const Frame&
   const auto score = [&](double t) {
     Joints moved = seed;
     moved[f] = t;
-    plan.solve_family(T, moved, bits, clamp, found);
+    // searched over the wrist's free joint: the member at t itself (no nearest-member search)
+    plan.solve_family(T, moved, bits, clamp, found, b, f == plan.free_wrist);
     Score out;
     if (!found.valid[b] || (found.near[b] & bits) != bits || !finite(found.q[b])) return out;
     out.exists = true;
@@ -160,22 +149,10 @@ inline PoseError member_in_limits(const Plan& plan, const Frame& T, const Frame&
     if (better(here, best)) best_t = t, best = here;
   }
   if (!best.exists) return {INFINITY, INFINITY};
-  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
-  double low = best_t - kStep, high = best_t + kStep;
-  double a = high - golden * (high - low), c = low + golden * (high - low);
-  Score score_a = score(a), score_c = score(c);
-  while (high - low > kLimitPrecision) {
-    if (!better(score_c, score_a)) {
-      high = c, c = a, score_c = score_a;
-      a = high - golden * (high - low);
-      score_a = score(a);
-    } else {
-      low = a, a = c, score_a = score_c;
-      c = low + golden * (high - low);
-      score_c = score(c);
-    }
-  }
-  double t = 0.5 * (low + high);
+  double t = golden_section(best_t - kStep, best_t + kStep, kLimitPrecision, score,
+                            [&](const Score& left, const Score& right) {
+                              return !better(right, left);
+                            });
   if (better(best, score(t))) t = best_t;
   if (!(score(t).violation <= slack)) return {INFINITY, INFINITY};
   candidate = found.q[b];
@@ -195,7 +172,7 @@ inline bool family_free(const Plan& plan, const Frame& T, const Frame& T_at,
   moved[3] += kPi;
   moved[5] += kPi;
   Candidates found;
-  plan.solve_family(T, moved, kWrist, clamp, found);
+  plan.solve_family(T, moved, kWrist, clamp, found, b);
   if (!found.valid[b] || (found.near[b] & kWrist) == 0) return false;
   return check(plan.chain, found.q[b].data(), T_at).within(tolerance);
 }

@@ -24,6 +24,7 @@
 #include "dhkin/bands.hpp"
 #include "dhkin/family.hpp"
 #include "dhkin/frame.hpp"
+#include "dhkin/golden.hpp"
 
 namespace dhkin {
 
@@ -52,14 +53,26 @@ namespace offset {
 
 // Cosines and sines of -q5, -q6, -q1: the motion G = E1(-q1) T M^-1 E6(-q6) E5(-q5) of joints
 // 2-4 (with T_home = T M^-1).
-struct Turns {
-  SinCos q5, q6, q1;
+template <class V>
+struct TurnsT {
+  SinCosT<V> q5, q6, q1;
 };
+using Turns = TurnsT<double>;
+
+inline Turns lane(const TurnsT<Lanes>& t, int l) {
+  return {lane(t.q5, l), lane(t.q6, l), lane(t.q1, l)};
+}
+inline Turns lane(const Turns& t, int) { return t; }
+template <class V>
+inline void set_lane(TurnsT<V>& t, int l, const Turns& x) {
+  set_lane(t.q5, l, x.q5), set_lane(t.q6, l, x.q6), set_lane(t.q1, l, x.q1);
+}
 
 // The rigid motion turning about the line of joint axis `joint` by the angle t, applied to v: a
 // point, or a direction.
-inline Vec3 screw_apply(const OffsetGeometry& g, int joint, const SinCos& t, const Vec3& v,
-                        bool point) {
+template <class V, class W>
+DHKIN_INLINE Vec3T<Product<V, W>> screw_apply(const OffsetGeometry& g, int joint, const SinCosT<V>& t,
+                                        const Vec3T<W>& v, bool point) {
   const Vec3& axis = g.directions[joint];
   if (!point) return rotate_about(axis, t.c, t.s, v);
   const Vec3& p = g.points[joint];
@@ -67,29 +80,36 @@ inline Vec3 screw_apply(const OffsetGeometry& g, int joint, const SinCos& t, con
 }
 
 // G v (a point or a direction).
-inline Vec3 motion_apply(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
-                         const Vec3& v, bool point) {
-  Vec3 x = screw_apply(g, 4, turns.q5, v, point);
+template <class V>
+DHKIN_INLINE Vec3T<V> motion_apply(const OffsetGeometry& g, const FrameT<V>& T_home,
+                             const TurnsT<V>& turns, const Vec3& v, bool point) {
+  Vec3T<V> x = screw_apply(g, 4, turns.q5, v, point);
   x = screw_apply(g, 5, turns.q6, x, point);
-  const Vec3 y = point ? T_home.apply(x) : T_home.rotate(x);
+  const Vec3T<V> y = point ? T_home.apply(x) : T_home.rotate(x);
   return screw_apply(g, 0, turns.q1, y, point);
 }
 
 // Component of v normal to n.
-inline Vec3 in_plane(const OffsetGeometry& g, const Vec3& v) { return v - dot(v, g.n) * g.n; }
+template <class V>
+DHKIN_INLINE Vec3T<V> in_plane(const OffsetGeometry& g, const Vec3T<V>& v) {
+  return v - dot(v, g.n) * g.n;
+}
 
 // The arm's target: axis 4's point under G, from axis 2's point, normal to n.
-inline Vec3 arm_point(const OffsetGeometry& g, const Frame& T_home, const Turns& turns) {
+template <class V>
+DHKIN_INLINE Vec3T<V> arm_point(const OffsetGeometry& g, const FrameT<V>& T_home,
+                          const TurnsT<V>& turns) {
   return in_plane(g, motion_apply(g, T_home, turns, g.points[3], true) - g.points[1]);
 }
 
 // Angle about n of v from plane_x.
-inline double plane_angle(const OffsetGeometry& g, const Vec3& v) {
+template <class V>
+DHKIN_INLINE V plane_angle(const OffsetGeometry& g, const Vec3T<V>& v) {
   return atan2(dot(v, g.plane_y), dot(v, g.plane_x));
 }
 
 // q6, turned the least that brings axis 4 onto the arm's reach boundary when it lies out of
-// reach by more than `clamp`; q6 itself otherwise (or when no turn reaches it).
+// reach by more than `clamp`; q6 itself otherwise (or when no turn reaches it). One lane.
 inline double kept_in_reach(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
                             const Vec3& arm, double q5, double q6, double clamp) {
   const double low = std::abs(g.upper_length - g.forearm_length);
@@ -125,60 +145,73 @@ inline double kept_in_reach(const OffsetGeometry& g, const Frame& T_home, const 
 }
 
 // q2, q3, q4 of one elbow branch, with its validity, flag and near bits.
+template <class V>
 struct ElbowRoot {
-  double q2 = 0.0, q3 = 0.0, q4 = 0.0;
-  bool valid = false;
-  std::uint8_t flag = 0, near = 0;
+  V q2{}, q3{}, q4{};
+  MaskOf<V> valid{};
+  BitsOf<V> flag{}, near{};
 };
 
 // What both elbow branches of one motion G share: the law of cosines (q3 of each branch, in
 // branch order), the reach test and flags, and G's angle about n.
+template <class V>
 struct ElbowSetup {
-  double q3[2] = {0.0, 0.0};
-  bool reach_ok = false, merged = false, clamped = false;
-  std::uint8_t flag = 0;
-  double total = 0.0;  // angle about n of G plane_x from plane_x
+  V q3[2] = {};
+  MaskOf<V> reach_ok{}, merged{}, clamped{};
+  BitsOf<V> flag{};
+  V total{};  // angle about n of G plane_x from plane_x
 };
 
-inline ElbowSetup elbow_setup(const OffsetGeometry& g, const Frame& T_home, const Turns& turns,
-                              const Vec3& arm, double reach_side, double clamp) {
-  const double span = norm(arm);
+template <class V>
+DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
+                                       const TurnsT<V>& turns, V span, double reach_side,
+                                       double clamp) {
   const double L2 = g.upper_length, L3 = g.forearm_length;
   const double low = std::abs(L2 - L3), high = L2 + L3;
-  const double outer = high - span, inner = span - low;
-  ElbowSetup out;
+  const V outer = high - span, inner = span - low;
+  ElbowSetup<V> out;
   out.reach_ok = outer >= -clamp && inner >= -clamp;
   out.clamped = outer < 0.0 || inner < 0.0;
   // (L2 L3)^2 - kappa^2 in factored form: accurate near both boundaries
-  double root = std::sqrt(std::max(outer, g.spread) * (high + span) * std::max(inner, g.spread) *
-                          (span + low)) / 2.0;
-  const double kappa = (span * span - L2 * L2 - L3 * L3) / 2.0;
-  out.merged = atan2(root, std::abs(kappa)) <= kMergeAngle;
-  if (out.merged) root = 0.0;
-  out.flag = out.merged || root <= kFlagBand * L2 * L3 ? kElbow : 0;
-  const double half = atan2(root, kappa);
-  double first = g.elbow_base + half, second = g.elbow_base - half;
-  const SinCos f = sincos(first);
-  const double turn = f.c * g.elbow_turn + g.sign3 * f.s * g.elbow_alpha;
-  if ((turn >= 0.0 ? 1.0 : -1.0) != reach_side) std::swap(first, second);
-  out.q3[0] = first, out.q3[1] = second;
+  V root = sqrt(max(outer, V(g.spread)) * (high + span) * max(inner, V(g.spread)) *
+                (span + low)) / 2.0;
+  const V kappa = (span * span - L2 * L2 - L3 * L3) / 2.0;
+  out.merged = small_angle(root, abs(kappa), kMergeAngle);
+  root = select(out.merged, V(0.0), root);
+  out.flag = bits_if(out.merged || root <= kFlagBand * L2 * L3, kElbow);
+  const V half = atan2(root, kappa);
+  const V first = g.elbow_base + half, second = g.elbow_base - half;
+  const SinCosT<V> f = sincos(first);
+  const V turn = f.c * g.elbow_turn + g.sign3 * f.s * g.elbow_alpha;
+  const auto swap = select(turn >= 0.0, V(1.0), V(-1.0)) != V(reach_side);
+  out.q3[0] = select(swap, second, first), out.q3[1] = select(swap, first, second);
   out.total = plane_angle(g, motion_apply(g, T_home, turns, g.plane_x, false));
   return out;
 }
 
+// The same, for the arm's target point (span = |arm|).
+template <class V>
+DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
+                                       const TurnsT<V>& turns, const Vec3T<V>& arm,
+                                       double reach_side, double clamp) {
+  return elbow_setup(g, T_home, turns, norm(arm), reach_side, clamp);
+}
+
 // Elbow branch e: the planar rotation taking the bent arm onto the target for q2, the angle of G
 // about n for q4.
-inline ElbowRoot elbow(const OffsetGeometry& g, const ElbowSetup& setup, const Vec3& arm,
-                       double seed_q2, const FamilyRequest& request, int e) {
-  ElbowRoot out;
+template <class V>
+DHKIN_INLINE ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& setup,
+                          const Vec3T<V>& arm, V seed_q2, const FamilyRequestT<V>& request,
+                          int e) {
+  ElbowRoot<V> out;
   out.flag = setup.flag;
   out.q3 = setup.q3[e];
-  const SinCos t3 = sincos(out.q3);
-  const Vec3 bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
-  out.near = norm(bent) <= request.seed_length ? kElbow : 0;
-  const bool seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
-  if (setup.clamped) out.near |= kClamped;
-  out.q2 = seeded ? seed_q2 : atan2(dot(g.n, cross(bent, arm)), dot(bent, arm));
+  const SinCosT<V> t3 = sincos(out.q3);
+  const Vec3T<V> bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
+  out.near = bits_if(norm_at_most(bent, request.seed_length), kElbow);
+  const auto seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
+  out.near = out.near | bits_if(setup.clamped, kClamped);
+  out.q2 = select(seeded, seed_q2, atan2(dot(g.n, cross(bent, arm)), dot(bent, arm)));
   out.q4 = g.sign4 * (setup.total - out.q2 - g.sign3 * out.q3);
   out.valid = setup.reach_ok && (e == 0 || !setup.merged);
   return out;
@@ -205,8 +238,8 @@ inline Member member(const OffsetGeometry& g, const Frame& T_home, const SinCos&
     turns.q6 = sincos(-t);
     arm = arm_point(g, T_home, turns);
   }
-  const ElbowSetup setup = elbow_setup(g, T_home, turns, arm, reach_side, request.clamp);
-  const ElbowRoot root = elbow(g, setup, arm, seed[1], request, e);
+  const ElbowSetup<double> setup = elbow_setup(g, T_home, turns, arm, reach_side, request.clamp);
+  const ElbowRoot<double> root = elbow(g, setup, arm, seed[1], request, e);
   Member out;
   out.q2 = root.q2, out.q3 = root.q3, out.q4 = root.q4, out.q6 = t;
   const double a = wrap(root.q2 - seed[1]), b = wrap(root.q3 - seed[2]),
@@ -216,7 +249,6 @@ inline Member member(const OffsetGeometry& g, const Frame& T_home, const SinCos&
   out.flag = root.flag;
   return out;
 }
-
 // Nearest-member search over q6: a grid of this half-width and step (rad) around the seed's q6
 // (where q6 would leave axis 4 out of reach it is moved onto the reach boundary, so far members
 // are found at the grid's edge), then golden-section search to kMemberPrecision within a step of
@@ -231,7 +263,6 @@ constexpr int kMemberGrid = 63;  // ceil(kMemberHalfWidth / kMemberStep)
 static_assert(kMemberGrid * kMemberStep >= kMemberHalfWidth &&
                   (kMemberGrid - 1) * kMemberStep < kMemberHalfWidth,
               "kMemberGrid = ceil(kMemberHalfWidth / kMemberStep)");
-const double kGolden = 0.5 * (std::sqrt(5.0) - 1.0);
 
 // At the wrist singularity the pose leaves a one-parameter family (q6 free, q2, q3, q4 following
 // it): the member nearest the seed in joint space (squared distance over joints 2-4 and 6),
@@ -250,21 +281,10 @@ inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const S
     const Member m = member(g, T_home, t1, q5, t, reach_side, seed, request, e);
     return m.valid ? m.distance : std::numeric_limits<double>::infinity();
   };
-  double low = best_t - kMemberStep, high = best_t + kMemberStep;
-  double a = high - kGolden * (high - low), b = low + kGolden * (high - low);
-  double value_a = value(a), value_b = value(b);
-  while (high - low > kMemberPrecision) {
-    if (value_a <= value_b) {
-      high = b, b = a, value_b = value_a;
-      a = high - kGolden * (high - low);
-      value_a = value(a);
-    } else {
-      low = a, a = b, value_a = value_b;
-      b = low + kGolden * (high - low);
-      value_b = value(b);
-    }
-  }
-  found = member(g, T_home, t1, q5, 0.5 * (low + high), reach_side, seed, request, e);
+  const double middle =
+      golden_section(best_t - kMemberStep, best_t + kMemberStep, kMemberPrecision, value,
+                     [](double left, double right) { return left <= right; });
+  found = member(g, T_home, t1, q5, middle, reach_side, seed, request, e);
   if (!found.valid || found.distance > best) {  // the grid point is better (a kink inside)
     found = member(g, T_home, t1, q5, best_t, reach_side, seed, request, e);
   }
@@ -274,107 +294,120 @@ inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const S
 }  // namespace offset
 
 // The 8 branches of the offset-wrist family for target T, DH frame 0 -> 6.
-inline void solve_offset_wrist(const OffsetGeometry& g, const Frame& T,
-                               const FamilyRequest& request, Candidates& out) {
+template <class V>
+inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
+                               const FamilyRequestT<V>& request, CandidatesT<V>& out) {
   using namespace offset;
-  const Joints& seed = *request.seed;
-  const Frame T_home = T * g.home_inverse;
+  const JointsT<V>& seed = *request.seed;
+  const FrameT<V> T_home = T * g.home_inverse;
   // q1: both roots of n(q1) . (wrist point - r1) = c
-  const Vec3 h = T.apply(g.wrist_in_flange) - g.points[0];
-  const double along_n = dot(h, g.n), along_side = dot(h, g.side);
-  const double distance = std::sqrt(along_n * along_n + along_side * along_side);
+  const Vec3T<V> h = T.apply(g.wrist_in_flange) - g.points[0];
+  const V along_n = dot(h, g.n), along_side = dot(h, g.side);
+  const V distance = sqrt(along_n * along_n + along_side * along_side);
   const double c = g.lateral;
-  out.why[0] = distance, out.why[1] = std::abs(c);
-  const double gap = distance - std::abs(c);
-  const bool shoulder_ok = gap >= -request.clamp;
-  double root = std::sqrt(std::max(gap, g.spread) * (distance + std::abs(c)));
-  const bool shoulder_merged = c != 0.0 && atan2(root, std::abs(c)) <= kMergeAngle;
-  if (shoulder_merged) root = 0.0;
-  const std::uint8_t shoulder_flag =
-      shoulder_merged || root <= kFlagBand * g.scale ? kShoulder : 0;
+  out.why[0] = distance, out.why[1] = V(std::abs(c));
+  const V gap = distance - std::abs(c);
+  const auto shoulder_ok = gap >= -request.clamp;
+  V root = sqrt(max(gap, V(g.spread)) * (distance + std::abs(c)));
+  const auto shoulder_merged = c != 0.0 && small_angle(root, V(std::abs(c)), kMergeAngle);
+  root = select(shoulder_merged, V(0.0), root);
+  const BitsOf<V> shoulder_flag =
+      bits_if(shoulder_merged || root <= kFlagBand * g.scale, kShoulder);
   // Near the shoulder merge q1 is only as good as the pose over the root: a pose known to `clamp`
   // moves it by ~clamp / root (at most ~sqrt(2 clamp / |c|)), and q5 inherits that: the wrist
   // counts as near singular within this much more.
-  double q1_uncertainty = 0.0;
+  V q1_uncertainty(0.0);
   if (c != 0.0) {
-    q1_uncertainty = std::min(request.clamp / std::max(root, 1e-300),
-                              std::sqrt(2.0 * request.clamp / std::abs(c)));
+    q1_uncertainty = min(request.clamp / max(root, V(1e-300)),
+                         V(std::sqrt(2.0 * request.clamp / std::abs(c))));
   }
-  std::uint8_t shoulder_near = c == 0.0 && distance <= request.seed_length ? kShoulder : 0;
-  const bool shoulder_seeded = shoulder_near != 0 && (request.use_seed & kShoulder) != 0;
-  if (gap < 0.0) shoulder_near |= kClamped;
-  const double phase = atan2(along_side, along_n);
-  const double half = atan2(root, c);
+  BitsOf<V> shoulder_near = bits_if(c == 0.0 && distance <= request.seed_length, kShoulder);
+  const auto shoulder_seeded = shoulder_near != 0 && (request.use_seed & kShoulder) != 0;
+  shoulder_near = shoulder_near | bits_if(gap < 0.0, kClamped);
+  const V phase = atan2(along_side, along_n);
+  const V half = atan2(root, V(c));
   const Vec3& w6 = g.directions[5];
   for (int s = 0; s < 2; ++s) {
-    double q1;
-    if (shoulder_seeded) {
-      q1 = seed[0] + (s == 0 ? 0.0 : kPi);
-    } else {
-      q1 = s == 0 ? phase + g.left_sign * half : phase - g.left_sign * half;
-    }
+    const V q1 = select(shoulder_seeded, seed[0] + (s == 0 ? 0.0 : kPi),
+                        s == 0 ? phase + g.left_sign * half : phase - g.left_sign * half);
     const double reach_side = s == 0 ? g.lateral_sign : -g.lateral_sign;
-    const bool q1_valid = shoulder_ok && (s == 0 || !shoulder_merged);
+    const auto q1_valid = shoulder_ok && (s == 0 || !shoulder_merged);
     // q5 from n(q1) . z6 = cos(q5 - psi), q6 from the rest
-    const SinCos t1 = sincos(q1);
-    const Vec3 m = rotate_about(g.directions[0], t1.c, t1.s, g.n);
-    const Vec3 f{T.R[0][0] * m.x + T.R[1][0] * m.y + T.R[2][0] * m.z,  // R_T^T n(q1)
-                 T.R[0][1] * m.x + T.R[1][1] * m.y + T.R[2][1] * m.z,
-                 T.R[0][2] * m.x + T.R[1][2] * m.y + T.R[2][2] * m.z};
-    const Vec3 u = g.home_rotation * f;  // u = M_R R_T^T n(q1)
-    const double cosine = dot(u, w6);
-    const double sine = norm(cross(w6, u));  // exact for tiny angles (no arccos)
-    const std::uint8_t wrist_flag = sine <= kFlagBand ? kWrist : 0;
-    const std::uint8_t wrist_near = sine <= request.seed_angle + q1_uncertainty ? kWrist : 0;
-    const bool wrist_seeded = wrist_near != 0 && (request.use_seed & kWrist) != 0;
-    const double q5_half = atan2(sine, cosine);
-    const Vec3 a = u - cosine * w6;
-    const SinCos minus_q1 = sincos(-q1);
+    const SinCosT<V> t1 = sincos(q1);
+    const Vec3T<V> m = rotate_about(g.directions[0], t1.c, t1.s, g.n);
+    const Vec3T<V> f{T.R[0][0] * m.x + T.R[1][0] * m.y + T.R[2][0] * m.z,  // R_T^T n(q1)
+                     T.R[0][1] * m.x + T.R[1][1] * m.y + T.R[2][1] * m.z,
+                     T.R[0][2] * m.x + T.R[1][2] * m.y + T.R[2][2] * m.z};
+    const Vec3T<V> u = g.home_rotation * f;  // u = M_R R_T^T n(q1)
+    const V cosine = dot(u, w6);
+    const V sine = norm(cross(w6, u));  // exact for tiny angles (no arccos)
+    const BitsOf<V> wrist_flag = bits_if(sine <= kFlagBand, kWrist);
+    const auto wrist_close = sine <= request.seed_angle + q1_uncertainty;
+    const BitsOf<V> wrist_near = bits_if(wrist_close, kWrist);
+    const auto wrist_seeded = wrist_close && (request.use_seed & kWrist) != 0;
+    const V q5_half = atan2(sine, cosine);
+    const Vec3T<V> a = u - cosine * w6;
+    const SinCosT<V> minus_q1 = negated(t1);  // sincos(-q1)
     for (int w = 0; w < 2; ++w) {
-      const double q5 = g.psi + (w == 0 ? g.up_sign * q5_half : -g.up_sign * q5_half);
-      const SinCos minus_q5 = sincos(-q5);
-      double q6;
-      if (wrist_seeded) {
-        q6 = seed[5];
-      } else {
-        const Vec3 t = rotate_about(g.directions[4], minus_q5.c, minus_q5.s, g.n);  // R5^T n
-        const Vec3 b = t - dot(t, w6) * w6;
-        q6 = atan2(dot(w6, cross(a, b)), dot(a, b));
-      }
-      Turns turns{minus_q5, sincos(-q6), minus_q1};
-      Vec3 arm = arm_point(g, T_home, turns);
-      if (wrist_near != 0) {
-        const double kept = kept_in_reach(g, T_home, turns, arm, q5, q6, request.clamp);
-        if (kept != q6) {
-          q6 = kept;
-          turns.q6 = sincos(-q6);
-          arm = arm_point(g, T_home, turns);
+      const V q5 = g.psi + (w == 0 ? g.up_sign * q5_half : -g.up_sign * q5_half);
+      const SinCosT<V> minus_q5 = sincos(-q5);
+      const Vec3T<V> t = rotate_about(g.directions[4], minus_q5.c, minus_q5.s, g.n);  // R5^T n
+      const Vec3T<V> b = t - dot(t, w6) * w6;
+      V q6 = select(wrist_seeded, seed[5], atan2(dot(w6, cross(a, b)), dot(a, b)));
+      TurnsT<V> turns{minus_q5, sincos(-q6), minus_q1};
+      Vec3T<V> arm = arm_point(g, T_home, turns);
+      for_each_lane(wrist_close, [&](int l) {  // near the wrist singularity: q6 kept in reach
+        Turns turns_l = lane(turns, l);
+        const double q6_l = lane(q6, l);
+        const double kept = kept_in_reach(g, lane(T_home, l), turns_l, lane(arm, l), lane(q5, l),
+                                          q6_l, request.clamp);
+        if (kept != q6_l) {
+          turns_l.q6 = sincos(-kept);
+          set_lane(q6, l, kept);
+          set_lane(turns, l, turns_l);
+          set_lane(arm, l, arm_point(g, lane(T_home, l), turns_l));
         }
-      }
-      out.why[2 + 2 * s + w] = norm(arm);
+      });
+      const V span = norm(arm);
+      out.why[2 + 2 * s + w] = span;
       // the two wrist roots coincide exactly: one solution
-      const bool wrist_valid = w == 0 || wrist_seeded || sine != 0.0;
-      const ElbowSetup setup = elbow_setup(g, T_home, turns, arm, reach_side, request.clamp);
+      const auto wrist_valid = w == 0 || wrist_seeded || sine != 0.0;
+      const ElbowSetup<V> setup = elbow_setup(g, T_home, turns, span, reach_side, request.clamp);
       for (int e = 0; e < 2; ++e) {
-        const ElbowRoot r = elbow(g, setup, arm, seed[1], request, e);
+        const ElbowRoot<V> r = elbow(g, setup, arm, seed[1], request, e);
         const int b = 4 * s + 2 * e + w;
         out.q[b] = {q1, r.q2, r.q3, r.q4, q5, q6};
         out.valid[b] = q1_valid && wrist_valid && r.valid;
         out.flags[b] = shoulder_flag | wrist_flag | r.flag;
         out.near[b] = shoulder_near | wrist_near | r.near;
       }
-      if (wrist_seeded && q1_valid) {
+      for_each_lane(wrist_seeded && q1_valid, [&](int l) {  // the member nearest the seed
+        Joints seed_l;
+        const FamilyRequest request_l = lane(request, l, seed_l);
         for (int e = 0; e < 2; ++e) {
           const int b = 4 * s + 2 * e + w;
+          if (request.only_branch >= 0 && b != request.only_branch) {
+            set_lane(out.valid[b], l, false);
+            continue;
+          }
           Member found;
-          if (nearest_member(g, T_home, minus_q1, q5, reach_side, seed, request, e, found)) {
-            out.q[b][1] = found.q2, out.q[b][2] = found.q3, out.q[b][3] = found.q4;
-            out.q[b][5] = found.q6;
-            out.valid[b] = true;
-            out.flags[b] = (out.flags[b] & ~kElbow) | found.flag;
+          const bool located =
+              request.at_seed
+                  ? (found = member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), seed_l[5],
+                                    reach_side, seed_l, request_l, e))
+                        .valid
+                  : nearest_member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), reach_side,
+                                   seed_l, request_l, e, found);
+          if (located) {
+            set_lane(out.q[b][1], l, found.q2);
+            set_lane(out.q[b][2], l, found.q3);
+            set_lane(out.q[b][3], l, found.q4);
+            set_lane(out.q[b][5], l, found.q6);
+            set_lane(out.valid[b], l, true);
+            set_lane(out.flags[b], l, (lane(out.flags[b], l) & ~kElbow) | found.flag);
           }
         }
-      }
+      });
     }
   }
   out.drop_non_finite();

@@ -87,10 +87,13 @@ struct Plan {
   // The reach band: reach conditions violated by at most this (m) are clamped, not rejected.
   double clamp(double tolerance) const { return tolerance * (1.0 + lever) + deviation; }
 
-  // The family's closed form for target T (DH frame 0 -> n).
-  void solve_family(const Frame& T, const Joints& seed, int use_seed, double clamp,
-                    Candidates& out) const {
-    const FamilyRequest request{&seed, use_seed, seed_angle, seed_length, clamp};
+  // The family's closed form for target T (DH frame 0 -> n); per lane for V = Lanes.
+  // `only_branch` and `at_seed`: which seeded member is searched, and how (FamilyRequest).
+  template <class V>
+  void solve_family(const FrameT<V>& T, const JointsT<V>& seed, int use_seed, double clamp,
+                    CandidatesT<V>& out, int only_branch = -1, bool at_seed = false) const {
+    const FamilyRequestT<V> request{&seed,       use_seed,    seed_angle, seed_length,
+                                    clamp,       only_branch, at_seed};
     switch (family) {
       case Family::spherical_wrist: solve_spherical_wrist(spherical, T, request, out); break;
       case Family::stanford: solve_stanford(spherical, T, request, out); break;
@@ -117,24 +120,23 @@ struct Plan {
   // The kWrist and kElbow flags of joint values q: each singularity's measure (|sin| of the wrist
   // angle, of the elbow angle; the slide's distance from its merge over the scale) at most
   // kFlagBand, from q itself (family geometry of the ideal model).
-  std::uint8_t value_flags(const Joints& q) const {
-    std::uint8_t bits = 0;
-    if (wrist_sine(q) <= kFlagBand) bits |= kWrist;
+  template <class V>
+  BitsOf<V> value_flags(const JointsT<V>& q) const {
     if (family == Family::offset_wrist) {
-      if (std::abs(sincos(q[2] - offset.elbow_base).s) <= kFlagBand) bits |= kElbow;
-      return bits;
+      return bits_if(small_sine(q[4] - offset.psi, kFlagBand), kWrist) |
+             bits_if(small_sine(q[2] - offset.elbow_base, kFlagBand), kElbow);
     }
     const SphericalGeometry& g = spherical;
+    const BitsOf<V> wrist = bits_if(small_sine(g.wrist_directions[1] * q[4] + g.tilt, kFlagBand), kWrist);
     if (family == Family::spherical_wrist) {
-      if (std::abs(sincos(g.signs[2] * q[2] + g.bend_at_zero).s) <= kFlagBand) bits |= kElbow;
-    } else if (std::abs(g.signs[2] * q[2] + g.slide_along) <= kFlagBand * g.scale) {
-      bits |= kElbow;
+      return wrist | bits_if(small_sine(g.signs[2] * q[2] + g.bend_at_zero, kFlagBand), kElbow);
     }
-    return bits;
+    return wrist | bits_if(abs(g.signs[2] * q[2] + g.slide_along) <= kFlagBand * g.scale, kElbow);
   }
 
   // Revolute values wrapped to (-pi, pi], prismatic ones kept.
-  void wrap_revolute(Joints& q) const {
+  template <class V>
+  void wrap_revolute(JointsT<V>& q) const {
     for (int j = 0; j < kDof; ++j) {
       if (revolute(j)) q[j] = wrap(q[j]);
     }
@@ -152,13 +154,15 @@ struct Plan {
   }
 
   // Whether a and b differ by at most `distance` on every joint (mod 2pi).
-  bool same(const Joints& a, const Joints& b, double distance) const {
-    for (int j = 0; j < kDof; ++j) {
-      double d = a[j] - b[j];
+  template <class V>
+  MaskOf<V> same(const JointsT<V>& a, const JointsT<V>& b, double distance) const {
+    MaskOf<V> close = every_lane<V>(true);
+    for (int j = 0; j < kDof && any(close); ++j) {
+      V d = a[j] - b[j];
       if (revolute(j)) d = wrap(d);
-      if (std::abs(d) > distance) return false;
+      close = close && !(abs(d) > distance);
     }
-    return true;
+    return close;
   }
 
   // Whether some 2pi copy of every joint value lies within the limits (+- slack).

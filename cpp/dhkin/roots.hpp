@@ -155,7 +155,7 @@ inline Point held_member(const Plan& plan, const Frame& T_dh, const Frame& T_at,
   point.t = t;
   Joints moved = base;
   moved[plan.free_wrist] = t;
-  plan.solve_family(T_dh, moved, kWrist, clamp, found);
+  plan.solve_family(T_dh, moved, kWrist, clamp, found, b, true);
   if (!found.valid[b] || !finite(found.q[b])) return point;
   point.q = found.q[b];
   plan.wrap_revolute(point.q);

@@ -29,6 +29,7 @@ class Chain:
 
 class Answer:
     count: int
+    found: int  # solutions stored; -1 when the pose or the seed was rejected
     status: int
     projection: float
     candidates: int
@@ -53,6 +54,11 @@ class ClosedForm:
                   errors: NDArray[np.float64], totals: NDArray[np.int64],
                   why: NDArray[np.float64], info: NDArray[np.float64], *,
                   direct: bool = True) -> None: ...
+    def nearest(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
+                tolerance: float, frames: NDArray[np.float64], q: NDArray[np.float64],
+                valid: NDArray[np.bool_], branch: NDArray[np.int16], flags: NDArray[np.uint8],
+                errors: NDArray[np.float64], projection: NDArray[np.float64],
+                dropped: NDArray[np.int64]) -> tuple[int, int, int]: ...
     def direct_answers(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                        tolerance: float, frames: NDArray[np.float64],
                        answered: NDArray[np.bool_]) -> None: ...

@@ -36,8 +36,7 @@ import numpy as np
 
 from dhkin.compare import compare_with_urdf
 from dhkin.errors import DhkinError
-from dhkin.robot import Robot, builtin_dir
-from dhkin.urdf import generate
+from dhkin.robot import Robot, builtin_dir, load
 from dhkin.validators import load_in_pinocchio, load_in_yourdfpy, run_check_urdf
 from dhkin.vendors import VENDOR_REFERENCES
 
@@ -79,16 +78,21 @@ class RobotCheck:
 
 @dataclass(frozen=True)
 class CheckOptions:
+    """The options of a run; ``progress``: a bar per validation on a terminal's stderr (off
+    where several robots are checked at once)."""
+
     reference_dir: Path | None
     ik_poses: int = 10_000
     vendor_poses: int = VENDOR_POSES
     seed: int = 0
+    progress: bool = True
 
 
 def check_generated(robot: Robot) -> CheckCell:
-    """The committed artefacts in the built-in folder equal what generation gives now."""
+    """The committed artefacts in the built-in folder equal what generation gives now (the
+    robot's generation, made once: its URDF is the one the other checks read)."""
     folder = builtin_dir()
-    stale = [name for name, text in generate(robot.table).as_dict().items()
+    stale = [name for name, text in robot.generated().as_dict().items()
              if not (folder / name).is_file()
              or (folder / name).read_text(encoding="utf-8") != text]
     return CheckCell(not stale, "up to date" if not stale else "stale: " + ", ".join(stale))
@@ -167,18 +171,20 @@ def _ik_text(figures: dict[str, Any]) -> str:
     return text
 
 
-def check_ik(robot: Robot, poses: int, seed: int) -> CheckCell:
-    """Cross-validate the robot's own IK on the exact generated URDF (see the module docstring)."""
+def check_ik(robot: Robot, poses: int, seed: int, progress: bool = True) -> CheckCell:
+    """Cross-validate the robot's own IK on the exact generated URDF (see the module docstring);
+    ``progress``: a bar on stderr when it is a terminal."""
     from dhkin.validation import validate
 
     n = poses if robot.complete_ik else min(poses, NUMERICAL_POSES)
-    report = validate(robot, n=n, seed=seed, progress=sys.stderr.isatty(), reference="exact")
+    report = validate(robot, n=n, seed=seed, progress=progress and sys.stderr.isatty(),
+                      reference="exact")
     figures = validation_figures(report)
     return CheckCell(report.ok, f"{robot.ik_family}: {_ik_text(figures)}", figures=figures)
 
 
 def check_ik_vendor(robot: Robot, reference_dir: Path | None, poses: int,
-                    seed: int) -> CheckCell | None:
+                    seed: int, progress: bool = True) -> CheckCell | None:
     """Cross-validate the robot's own IK with targets made and solutions checked on its vendor
     URDF (frames from VENDOR_REFERENCES), or None when the robot has no vendor reference."""
     from dhkin.validation import validate
@@ -188,7 +194,7 @@ def check_ik_vendor(robot: Robot, reference_dir: Path | None, poses: int,
     vendor = VENDOR_REFERENCES[robot.name]
     if reference_dir is None or not (reference_dir / vendor.file).is_file():
         return CheckCell(False, f"missing {vendor.file}")
-    report = validate(robot, n=poses, seed=seed, progress=sys.stderr.isatty(),
+    report = validate(robot, n=poses, seed=seed, progress=progress and sys.stderr.isatty(),
                       reference=reference_dir / vendor.file, base=vendor.base, tip=vendor.tip)
     figures = validation_figures(report)
     return CheckCell(report.ok, f"{vendor.file}: {_ik_text(figures)}", figures=figures)
@@ -210,9 +216,10 @@ def check_robot(robot: Robot, options: CheckOptions) -> RobotCheck:
         "validators": lambda: check_validators(robot),
         "fk vs pin": lambda: check_fk(robot, options.seed),
         "vendor": lambda: check_vendor(robot, options.reference_dir),
-        "ik vs pin": lambda: check_ik(robot, options.ik_poses, options.seed),
+        "ik vs pin": lambda: check_ik(robot, options.ik_poses, options.seed, options.progress),
         "ik vs vendor": lambda: check_ik_vendor(robot, options.reference_dir,
-                                                options.vendor_poses, options.seed),
+                                                options.vendor_poses, options.seed,
+                                                options.progress),
     }
     started = time.perf_counter()
     cells: dict[str, CheckCell | None] = {}
@@ -229,3 +236,9 @@ def check_robot(robot: Robot, options: CheckOptions) -> RobotCheck:
     except DhkinError:
         family = "none"
     return RobotCheck(robot.name, family, cells, time.perf_counter() - started)
+
+
+def check_named(name: str, options: CheckOptions) -> RobotCheck:
+    """:func:`check_robot` of a built-in robot's name or a table file (what a worker process of
+    `dhkin check --jobs N` runs)."""
+    return check_robot(load(name), options)

@@ -44,12 +44,34 @@ def _robot_arg(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("robot", help="built-in robot name (see `dhkin robots`) or a table file")
 
 
+#: The heading of the built-in robots that are no vendor's arm (textbook examples).
+TEXTBOOK = "textbook arms (no vendor)"
+
+
 def cmd_robots(args: argparse.Namespace) -> int:
+    """The built-in robots by vendor (dhkin.vendors), and within a vendor by IK family."""
+    from collections import Counter
+
+    from dhkin.vendors import VENDOR_REFERENCES
+
+    groups: dict[str, list[tuple[str, str, Robot]]] = {}
     for name in builtin_names():
         robot = load(name)
-        family = robot.ik_family
-        print(f"{name:20s} {robot.dof} joints  {robot.table.convention:8s}  {family:16s} "
-              f"{robot.table.description}")
+        listed = VENDOR_REFERENCES.get(name)
+        vendor = listed.vendor if listed is not None and listed.vendor else TEXTBOOK
+        groups.setdefault(vendor, []).append((robot.ik_family, name, robot))
+    vendors = sorted((v for v in groups if v != TEXTBOOK), key=str.lower)
+    vendors += [v for v in groups if v == TEXTBOOK]
+    for vendor in vendors:
+        families = Counter(family for family, _, _ in groups[vendor])
+        print(f"{vendor}: {len(groups[vendor])} (" + ", ".join(
+            f"{family} {count}" for family, count in sorted(families.items())) + ")")
+        for family, name, robot in sorted(groups[vendor], key=lambda entry: entry[:2]):
+            print(f"  {family:16s} {name:21s} {robot.dof} joints  {robot.table.convention:8s}  "
+                  f"{robot.table.description}")
+    real = sum(len(groups[v]) for v in vendors if v != TEXTBOOK)
+    print(f"{real} real arms of {len([v for v in vendors if v != TEXTBOOK])} vendors, "
+          f"{len(groups.get(TEXTBOOK, []))} textbook arms")
     return EXIT_OK
 
 
@@ -397,6 +419,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--vendor-poses", type=positive_int, default=None,
                    help="IK poses per robot on its vendor URDF (default 2000)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="random seed (default 0)")
+    p.add_argument("--jobs", type=positive_int, default=None,
+                   help="robots checked at once, each in a process of its own (default: the "
+                        "CPUs this process may use; 1: one by one in this process)")
     p.add_argument("--details", action="store_true",
                    help="also print every check's figures, robot by robot")
     p.add_argument("--json", type=output_name,

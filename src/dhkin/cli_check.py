@@ -1,18 +1,28 @@
 """`dhkin check`, the main job: the checks of dhkin.checks robot by robot, a line for each as it
-finishes (dhkin.check_report), a progress bar on a terminal, then the failed checks, a summary
-and, asked for, every figure (``--details``, ``--json FILE``). Exit 1 if a check failed."""
+finishes (dhkin.check_report; in the order the robots were named), a progress bar on a
+terminal, then the failed checks, a summary and, asked for, every figure (``--details``,
+``--json FILE``). Exit 1 if a check failed. ``--jobs N`` (default: the CPUs this process may
+use) checks N robots at once, each in a worker process; the figures do not depend on it."""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import multiprocessing
+import signal
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from dhkin.cli_input import EXIT_FAILED, EXIT_OK
 from dhkin.errors import DhkinError
 from dhkin.robot import builtin_dir, builtin_names, load
+
+if TYPE_CHECKING:
+    from dhkin.checks import CheckOptions, RobotCheck
 
 
 def cmd_check(args: argparse.Namespace) -> int:
@@ -22,6 +32,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     from dhkin import check_report
     from dhkin.checks import VENDOR_POSES, CheckOptions, check_robot
     from dhkin.files import check_output, write_file
+    from dhkin.ik.workers import default_workers
     from dhkin.vendors import vendor_dir
 
     if not args.all and not args.robots:
@@ -41,12 +52,19 @@ def cmd_check(args: argparse.Namespace) -> int:
     for line in check_report.header_lines(shown):
         print(line, flush=True)
     results = []
-    # disable=None: no bar when stderr is not a terminal (tqdm's own test).
-    with tqdm(robots, desc="dhkin check", unit="robot", file=sys.stderr, disable=None,
-              leave=False) as bar:
-        for robot in bar:
-            bar.set_postfix_str(robot.name)
-            result = check_robot(robot, options)
+    jobs = min(len(robots), default_workers() if args.jobs is None else args.jobs)
+    with contextlib.ExitStack() as stack:
+        if jobs > 1:  # the pool first: its processes start before any thread of this one
+            pool = stack.enter_context(_pool(jobs))
+            checked = pool.imap(_check_in_worker, [(name, replace(options, progress=False))
+                                                   for name in names])
+        else:
+            checked = (check_robot(robot, options) for robot in robots)
+        # disable=None: no bar when stderr is not a terminal (tqdm's own test).
+        bar = stack.enter_context(tqdm(checked, total=len(robots), desc="dhkin check",
+                                       unit="robot", file=sys.stderr, disable=None,
+                                       leave=False))
+        for result in bar:
             results.append(result)
             tqdm.write(check_report.robot_line(result, shown), file=sys.stdout)
             sys.stdout.flush()
@@ -64,3 +82,21 @@ def cmd_check(args: argparse.Namespace) -> int:
     passed = all(result.ok for result in results)
     print("all checks passed" if passed else "SOME CHECKS FAILED")
     return EXIT_OK if passed else EXIT_FAILED
+
+
+def _ignore_interrupts() -> None:
+    """A worker leaves Ctrl-C to the command, which ends the pool and says it once."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _pool(jobs: int) -> Any:
+    """``jobs`` worker processes, started afresh ("spawn": not forked from this process, whose
+    IK worker threads a fork would not carry over)."""
+    return multiprocessing.get_context("spawn").Pool(jobs, initializer=_ignore_interrupts)
+
+
+def _check_in_worker(task: tuple[str, CheckOptions]) -> RobotCheck:
+    """One robot's checks in a worker process (the robot given by name or table path)."""
+    from dhkin.checks import check_named
+
+    return check_named(*task)

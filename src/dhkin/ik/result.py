@@ -101,7 +101,8 @@ class IKSolutions:
         self._residuals: NDArray[np.float64] | None = (np.zeros((0, 2)) if residuals is None
                                                        else residuals)
         self._reason, self._family, self._numerical = reason, family, numerical
-        self._projection, self._dropped = projection, dropped
+        self._projection: float | None = projection  # None: read from _answer when asked for
+        self._dropped: int | None = dropped
         self._answer: Any = None
         self._configure: Callable[[int, tuple[int, ...]], Configuration] | None = None
 
@@ -111,10 +112,10 @@ class IKSolutions:
         """The solutions of the compiled core's ``Answer`` (dhkin._core), read when asked for;
         ``configure(branch, turns)`` gives a solution's Configuration."""
         result = cls.__new__(cls)
-        result._answer, result._configure = answer, configure
+        result._answer, result._configure, result._family = answer, configure, family
         result._q = result._configurations = result._flags = result._residuals = None
-        result._reason, result._family, result._numerical = "", family, False
-        result._projection, result._dropped = answer.projection, answer.dropped
+        result._reason, result._numerical = "", False
+        result._projection = result._dropped = None  # read from the answer when asked for
         return result
 
     @property
@@ -160,10 +161,14 @@ class IKSolutions:
 
     @property
     def projection(self) -> float:
+        if self._projection is None:
+            self._projection = float(self._answer.projection)
         return self._projection
 
     @property
     def dropped(self) -> int:
+        if self._dropped is None:
+            self._dropped = int(self._answer.dropped)
         return self._dropped
 
     def __len__(self) -> int:

@@ -139,8 +139,12 @@ class ClosedFormSolver:
                 answer = self.core.solve(T, q_seed, tolerance, None, copies)
             except TypeError:
                 answer = None
-            if answer is not None and answer.status == 0:
-                return self._solutions(answer, tolerance)
+            if answer is not None:
+                found = answer.found  # solutions; -1: the pose or the seed was rejected
+                if found > 0:
+                    return IKSolutions.from_core(answer, self.family, self._configuration)
+                if found == 0:
+                    return self._solutions(answer, tolerance)
         return self._solve_checked(T, q_seed, tolerance, tcp, copies)
 
     def _solve_checked(self, T: ArrayLike, q_seed: ArrayLike | None, tolerance: float,
@@ -224,6 +228,9 @@ class ClosedFormSolver:
         (step 4) straight into the result. Without copies the result is B wide (then trimmed to
         the widest pose); with every copy each chunk is expanded into its own arrays and the
         chunks are joined at the end. Memory: the result and one chunk's work."""
+        if not copies:
+            return self._batch_nearest(targets, seeds, tolerance, frames, chunk_size,
+                                       first_index, workers)
         N = targets.shape[0]
         chunks: list[tuple[int, int, Any]] = []
         projection = np.empty(N)
@@ -240,7 +247,7 @@ class ClosedFormSolver:
             dropped[start:stop] = info[:, INFO.dropped]
             chunk_width = int(totals.sum(axis=1).max()) if stop > start else 0
             target = (self._batch_arrays(stop - start, chunk_width) if copies
-                      else tuple(a[start:stop] for a in out))  # type: ignore[union-attr]
+                      else tuple(a[start:stop] for a in out))
             chunk_targets = targets[start:stop]
 
             def expand(a: int, b: int, chunk_targets: NDArray[np.float64] = chunk_targets,
@@ -264,8 +271,42 @@ class ClosedFormSolver:
                         whole[start:stop, part_array.shape[1]:] = 0
                 out[2][start:stop, target[2].shape[1]:] = -1  # branch: none
         elif width < self.n_branches:
-            out = tuple(np.ascontiguousarray(a[:, :width]) for a in out)  # type: ignore
-        out_q, out_valid, out_branch, out_flags, out_errors = out  # type: ignore[misc]
+            out = tuple(np.ascontiguousarray(a[:, :width]) for a in out)
+        out_q, out_valid, out_branch, out_flags, out_errors = out
+        return IKBatch(q=out_q, valid=out_valid, flags=out_flags, branch=out_branch,
+                       branch_labels=self.branch_labels, family=self.family,
+                       residuals=out_errors, projection=projection, dropped=dropped)
+
+    def _batch_nearest(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
+                       tolerance: float, frames: NDArray[np.float64], chunk_size: int,
+                       first_index: int, workers: int) -> IKBatch:
+        """solve_batch without copies: the core writes each pose's solutions (its branches'
+        nearest in-limit copies) straight into the result (``ClosedForm.nearest``)."""
+        N, B = targets.shape[0], self.n_branches
+        out = self._batch_arrays(N, B)
+        projection, dropped = np.empty(N), np.empty(N, np.int64)
+        reports: list[tuple[int, int, int, int]] = []
+
+        def solve(a: int, b: int, start: int = 0) -> None:
+            a, b = start + a, start + b
+            q, valid, branch, flags, errors = (array[a:b] for array in out)
+            rejected, status, width = self.core.nearest(
+                targets[a:b], seeds if seeds.shape[0] == 1 else seeds[a:b], tolerance, frames,
+                q, valid, branch, flags, errors, projection[a:b], dropped[a:b])
+            reports.append((a + rejected if rejected >= 0 else -1, status, width, a))
+
+        for start in range(0, N, chunk_size):
+            stop = min(start + chunk_size, N)
+            _in_slices(stop - start, workers,
+                       lambda a, b, start=start: solve(a, b, start))  # type: ignore[misc]
+            rejected = [(index, status) for index, status, _, _ in reports if index >= 0]
+            if rejected:
+                index, status = min(rejected)
+                self._raise_status(targets[index], status, first_index + index)
+        width = max((w for _, _, w, _ in reports), default=0)
+        if width < B:
+            out = tuple(np.ascontiguousarray(a[:, :width]) for a in out)
+        out_q, out_valid, out_branch, out_flags, out_errors = out
         return IKBatch(q=out_q, valid=out_valid, flags=out_flags, branch=out_branch,
                        branch_labels=self.branch_labels, family=self.family,
                        residuals=out_errors, projection=projection, dropped=dropped)
@@ -320,12 +361,16 @@ class ClosedFormSolver:
         bad = np.flatnonzero(info[:, INFO.status])
         if bad.size:
             index = int(bad[0])
-            status = int(info[index, INFO.status])
-            if status == STATUS_BAD_SEED:
-                raise InputError(f"q_seed[{start + index}]: expected finite values",
-                                 field="q_seed", index=start + index, expected="finite values")
-            raise InputError(pose_error_message(f"T[{start + index}]", targets[index], status),
-                             field="T", index=start + index)
+            self._raise_status(targets[index], int(info[index, INFO.status]), start + index)
+
+    @staticmethod
+    def _raise_status(target: NDArray[np.float64], status: int, index: int) -> None:
+        """The InputError of pose ``index`` (``target``) rejected with ``status``."""
+        if status == STATUS_BAD_SEED:
+            raise InputError(f"q_seed[{index}]: expected finite values", field="q_seed",
+                             index=index, expected="finite values")
+        raise InputError(pose_error_message(f"T[{index}]", target, status), field="T",
+                         index=index)
 
     def solve_chunks(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                      tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,

@@ -47,10 +47,10 @@ from dhkin.validation.report import (
 from dhkin.validation.rerun import replay
 from dhkin.validation.run import (
     DEFAULT_JOINT_TOLERANCE,
-    POSE_ROUNDING,
     _resolvable,
     validate,
 )
+from dhkin.validation.sample_checks import POSE_ROUNDING
 from dhkin.validation.samples import (
     CONTINUITY_DISTANCE,
     CONTINUITY_SETS,

@@ -76,7 +76,6 @@ from __future__ import annotations
 
 import sys
 import time
-from collections import Counter
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -86,151 +85,25 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dhkin.arm import Arm
-from dhkin.errors import DhkinError, InputError
+from dhkin.errors import InputError
 from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 from dhkin.validation import arguments
 from dhkin.validation.adapters import IKCallable, own_ik
-from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, CallResult, IKCaller, takes_seed
-from dhkin.validation.matching import (
-    SINGULAR_FAMILY_FIXED_JOINTS,
-    configuration_labels,
-    nearest_distances,
-    residuals,
-    wrap,
-    wrist_singular,
-)
-from dhkin.validation.multistart import (
-    RootReference,
-    check_reference,
-    missing_roots,
-    needs_reference,
-)
+from dhkin.validation.batched import check_all_batched
+from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, IKCaller, takes_seed
+from dhkin.validation.matching import configuration_labels
+from dhkin.validation.multistart import RootReference, check_reference, needs_reference
 from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
-from dhkin.validation.report import OUTCOMES, SampleResult, ValidationReport
-from dhkin.validation.samples import (
-    CONTINUITY_DISTANCE,
-    SEED_PERTURBATION,
-    perturbed_seeds,
-    reference_samples,
-    sample_joint_vectors,
+from dhkin.validation.report import ValidationReport
+from dhkin.validation.sample_checks import (
+    check_continuity,
+    check_sample,
+    missing_branches,
+    resolvable,
 )
-from dhkin.validation.verify import verify_solutions
-
-#: Pose rounding (m and rad) of a target computed in floating point, a few ulps of a 1 m arm:
-#: the joint difference a pose cannot resolve is about POSE_ROUNDING / sigma_min(J).
-POSE_ROUNDING = 1e-14
-
-
-def _compared_joints(robot: Arm, q_sampled: NDArray[np.float64],
-                     seeded: bool) -> NDArray[np.int64]:
-    """Joints the missing check compares (all, except at the wrist singularity without seed)."""
-    if wrist_singular(robot, q_sampled) and not seeded:
-        return np.array(SINGULAR_FAMILY_FIXED_JOINTS)
-    return np.arange(robot.dof)
-
-
-@dataclass(frozen=True)
-class _Checked:
-    """Outcome of one sample before it is turned into a (JSON-ready) SampleResult."""
-
-    outcome: str
-    detail: str
-    position: NDArray[np.float64]
-    rotation: NDArray[np.float64]
-
-
-def _resolvable(robot: Arm, q: NDArray[np.float64], joint_tolerance: float,
-                noise: float = POSE_ROUNDING) -> float:
-    """Joint distance under which two solutions of one pose count as the same at q:
-    joint_tolerance + noise / sigma_min of Pinocchio's Jacobian (6 x n) at q, with ``noise``
-    the pose's uncertainty: its rounding, or the reference's deviation from the table's model
-    (a vendor description's target is a pose of the vendor's model, not exactly of ours)."""
-    sigma = np.linalg.svd(robot.reference().jacobian(q), compute_uv=False)
-    return joint_tolerance + noise / max(float(sigma.min()), 1e-300)
-
-
-def _matched(robot: Arm, model: TargetModel, Q: NDArray[np.float64], q: NDArray[np.float64],
-             joints: NDArray[np.int64], joint_tolerance: float,
-             residual: float = 0.0) -> tuple[bool, float]:
-    """Whether some row of Q is q (mod 2pi on ``joints``, widened by :func:`_resolvable` with
-    the pose's uncertainty: the reference's deviation, or the residual of the solutions (two
-    joint vectors within r of one pose can differ by ~r / sigma_min))."""
-    closest = float(np.abs(wrap(robot, Q - q)[:, joints]).max(axis=1).min())
-    noise = max(POSE_ROUNDING, model.deviation, residual)
-    found = closest <= joint_tolerance or closest <= _resolvable(robot, q, joint_tolerance, noise)
-    return found, closest
-
-
-def _check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64],
-                  T: NDArray[np.float64], call: CallResult, tolerance: float,
-                  joint_tolerance: float, seeded: bool) -> tuple[_Checked, NDArray[np.float64]]:
-    """wrong / no_solution / missing / success of the first call, and its finite solutions."""
-    returned = call.solutions
-    if call.problem:  # it raised, exited, timed out, or returned no list of joint vectors
-        empty = np.zeros(0)
-        return _Checked(call.outcome, call.problem, empty, empty), np.zeros((0, robot.dof))
-    Q, position, rotation, problem = verify_solutions(robot, model, T, returned, tolerance)
-    if problem:
-        return _Checked("wrong", problem, position, rotation), Q
-    if not returned:
-        return _Checked("no_solution", "nothing returned for a reachable target", position,
-                        rotation), Q
-    residual = float(max(position.max(), rotation.max())) if len(Q) else 0.0
-    found, closest = _matched(robot, model, Q, q_sampled,
-                              _compared_joints(robot, q_sampled, seeded), joint_tolerance,
-                              residual)
-    if not found and robot.dof == 6 and all(j.is_revolute for j in robot.table.joints):
-        # one root with a returned solution at the tolerance: the segment between them solves
-        # the pose too (near a singularity the pose cannot tell them apart)
-        found = not missing_roots(model, T, q_sampled[None], Q, tolerance, joint_tolerance)
-    if not found:
-        return _Checked("missing", f"closest returned solution differs by {closest:.2e} "
-                                   "(mod 2pi)", position, rotation), Q
-    return _Checked("success", "", position, rotation), Q
-
-
-def _missing_branches(robot: Arm, model: TargetModel, T: NDArray[np.float64],
-                      q_sampled: NDArray[np.float64], checked: _Checked, Q: NDArray[np.float64],
-                      tolerance: float, joint_tolerance: float) -> list[tuple[str, float]]:
-    """(configuration, closest distance) of each branch of T (closed form or general 6R) that
-    Q lacks (``checked``: Q's residuals on the reference, reused for a branch equal to a row).
-
-    The branches are ``robot.ik(T, q_seed=q_sampled, copies=False)``, those that verify on the
-    reference. A branch on the wrist singularity is a one-parameter family: only joints 1 and 5
-    are compared there. A branch is matched like the sampled q (:func:`_matched`, with the
-    sigma_min widening at the branch where the plain joint tolerance does not do).
-    """
-    try:
-        branches = robot.ik(T, q_seed=q_sampled, copies=False)
-    except DhkinError:
-        return []
-    if not len(branches):
-        return []
-    position, rotation = residuals(model, T, branches.q, Q, checked.position, checked.rotation)
-    allowed = tolerance + model.deviation
-    verified = np.flatnonzero((position <= allowed) & (rotation <= allowed))
-    rows = branches.q[verified]
-    closest = nearest_distances(robot, Q, rows, wrist_singular(robot, rows))
-    noise = max(POSE_ROUNDING, model.deviation)
-    missing = []
-    for k, distance in zip(verified, closest, strict=True):
-        if distance <= joint_tolerance or distance <= _resolvable(
-                robot, branches.q[k], joint_tolerance, noise):
-            continue
-        name = (str(branches.configurations[k]) if k < len(branches.configurations)
-                else f"branch {k}")
-        missing.append((name, float(distance)))
-    return missing
-
-
-def _nearest_to_seed(robot: Arm, Q: NDArray[np.float64],
-                     seed: NDArray[np.float64]) -> tuple[float, int]:
-    """Largest joint distance (mod 2pi) of the solution nearest ``seed``, and its joint."""
-    distance = np.abs(wrap(robot, Q - seed))
-    best = int(np.argmin(distance.max(axis=1)))
-    joint = int(np.argmax(distance[best]))
-    return float(distance[best, joint]), joint
+from dhkin.validation.samples import perturbed_seeds, reference_samples, sample_joint_vectors
+from dhkin.validation.tally import Tally
 
 
 def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> Iterable[Any]:
@@ -239,12 +112,6 @@ def _progress(iterable: Iterable[Any], total: int, label: str, show: bool) -> It
     from tqdm import tqdm
 
     return tqdm(iterable, total=total, desc=label, unit="pose", leave=False, file=sys.stderr)
-
-
-#: Returned solutions a failure record keeps (per call): every 2pi copy of the 16 branches of
-#: a UR-type arm with +-360 deg joints (16 * 2^6), while an IK returning up to
-#: MAX_SOLUTIONS_PER_CALL rows on every pose cannot make the report hold gigabytes.
-FAILURE_SOLUTIONS_KEPT = 1024
 
 
 #: Default ``joint_tolerance`` (rad, m for prismatic joints) of the missing checks.
@@ -317,12 +184,19 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
     callable_ik = own_ik(robot) if ik is None else ik
     q, sets = sample_joint_vectors(robot, n, settings.seed)
     return run_samples(robot, model, callable_ik, q, sets,
-                perturbed_seeds(robot, q, sets, settings.seed), settings)
+                       perturbed_seeds(robot, q, sets, settings.seed), settings,
+                       batched=(ik is None and robot.complete_ik and not settings.isolate
+                                and not needs_reference(robot)))
 
 
 def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
-         sets: list[str], perturbed: NDArray[np.float64],
-         settings: RunSettings) -> ValidationReport:
+                sets: list[str], perturbed: NDArray[np.float64], settings: RunSettings,
+                batched: bool = False) -> ValidationReport:
+    """Check the samples ``q`` (sets ``sets``, continuity seeds ``perturbed``) of ``ik`` on
+    ``model``. ``batched``: ``ik`` is dhkin's own complete IK of ``robot``
+    (:func:`~dhkin.validation.adapters.own_ik`), answered in batches
+    (:mod:`dhkin.validation.batched`: the same checks and figures); else pose by pose, each call
+    guarded."""
     started = time.perf_counter()
     targets = model.fk(q)
     labels = configuration_labels(robot, targets, q)
@@ -336,8 +210,12 @@ def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.fl
         report.reference_deviation = {"position_max": float(position.max()),
                                       "rotation_max": float(rotation.max())}
         model.deviation = max(report.reference_deviation.values())
-    with IKCaller(ik, robot, settings.timeout, settings.isolate) as caller:
-        _check_all(robot, model, caller, q, sets, perturbed, targets, labels, settings, report)
+    if not (batched and check_all_batched(robot, model, q, sets, perturbed, targets, labels,
+                                          settings.tolerance, settings.joint_tolerance,
+                                          report)):
+        with IKCaller(ik, robot, settings.timeout, settings.isolate) as caller:
+            _check_all(robot, model, caller, q, sets, perturbed, targets, labels, settings,
+                       report)
     report.seconds = time.perf_counter() - started
     return report
 
@@ -349,10 +227,7 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
     gets read-only copies (see :class:`IKCaller`): ``q``, ``targets`` and ``perturbed`` stay
     the validator's own, for the checks and the failure file."""
     tolerance, joint_tolerance = settings.tolerance, settings.joint_tolerance
-    counts: Counter[str] = Counter()
-    by_set: dict[str, Counter[str]] = {}
-    by_configuration: dict[str, Counter[str]] = {}
-    all_position, all_rotation, n_solutions = [], [], []
+    tally = Tally()
     seeded = takes_seed(caller.ik)
     reference = (RootReference(robot, model)
                  if settings.complete_expected and needs_reference(robot) else None)
@@ -363,16 +238,14 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
     unseeded = reference is not None
     for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", settings.progress):
         call = caller(targets[k], None if unseeded else q[k])
-        returned = call.solutions
-        checked, Q = _check_sample(robot, model, q[k], targets[k], call, tolerance,
+        checked, Q = check_sample(robot, model, q[k], targets[k], call, tolerance,
                                    joint_tolerance, seeded and not unseeded)
         outcome, detail = checked.outcome, checked.detail
-        all_position.append(checked.position)
-        all_rotation.append(checked.rotation)
+        tally.residuals(checked.position, checked.rotation)
         missing: list[str] = []
         if outcome == "success" and check_branches:
             report.branch_checked += 1
-            lacking = _missing_branches(robot, model, targets[k], q[k], checked, Q, tolerance,
+            lacking = missing_branches(robot, model, targets[k], q[k], checked, Q, tolerance,
                                         joint_tolerance)
             if lacking:
                 missing = [name for name, _ in lacking]
@@ -387,63 +260,14 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
         returned_perturbed: list[NDArray[np.float64]] = []
         if outcome == "success" and seeded and np.all(np.isfinite(perturbed[k])):
             report.continuity_checked += 1
-            outcome, detail, returned_perturbed = _check_continuity(
-                robot, model, caller, targets[k], perturbed[k], tolerance, all_position,
-                all_rotation)
-        counts[outcome] += 1
-        by_set.setdefault(sets[k], Counter())[outcome] += 1
-        if labels[k]:
-            by_configuration.setdefault(labels[k], Counter())[outcome] += 1
-        n_solutions.append(len(returned))
-        if outcome != "success":
-            if max(len(returned), len(returned_perturbed)) > FAILURE_SOLUTIONS_KEPT:
-                detail += (f" (the failure keeps the first {FAILURE_SOLUTIONS_KEPT} of "
-                           f"{max(len(returned), len(returned_perturbed))} solutions)")
-            report.failures.append(SampleResult(
-                index=k, sample_set=sets[k], q_sampled=q[k].tolist(), target=targets[k].tolist(),
-                returned=[r.tolist() for r in returned[:FAILURE_SOLUTIONS_KEPT]],
-                position_errors=checked.position.tolist(),
-                rotation_errors=checked.rotation.tolist(), outcome=outcome, detail=detail,
-                configuration=labels[k],
-                perturbed_seed=(perturbed[k].tolist() if np.all(np.isfinite(perturbed[k]))
-                                else []),
-                returned_perturbed=[r.tolist()
-                                    for r in returned_perturbed[:FAILURE_SOLUTIONS_KEPT]],
-                missing_branches=missing))
-    report.counts = {o: counts.get(o, 0) for o in OUTCOMES}
-    report.by_set = {s: dict(c) for s, c in by_set.items()}
-    report.by_configuration = {s: dict(c) for s, c in sorted(by_configuration.items())}
-    report.solution_counts = {"min": float(min(n_solutions)), "max": float(max(n_solutions)),
-                              "median": float(np.median(n_solutions))}
-    position, rotation = np.concatenate(all_position), np.concatenate(all_rotation)
-    if position.size:
-        report.residuals = {
-            "position_max": float(position.max()), "position_median": float(np.median(position)),
-            "rotation_max": float(rotation.max()), "rotation_median": float(np.median(rotation)),
-        }
+            outcome, detail, returned_perturbed = check_continuity(
+                robot, model, caller(targets[k], perturbed[k]), targets[k], perturbed[k],
+                tolerance, tally)
+        tally.add(report, k, sets[k], labels[k], outcome, detail, q[k], targets[k],
+                  call.solutions, checked.position, checked.rotation, perturbed[k],
+                  returned_perturbed, missing)
+    tally.finish(report)
 
 
-def _check_continuity(robot: Arm, model: TargetModel, caller: IKCaller, T: NDArray[np.float64],
-                      seed: NDArray[np.float64], tolerance: float,
-                      all_position: list[NDArray[np.float64]],
-                      all_rotation: list[NDArray[np.float64]]
-                      ) -> tuple[str, str, list[NDArray[np.float64]]]:
-    """Second call with the perturbed seed: (outcome, detail, what came back)."""
-    call = caller(T, seed)
-    returned = call.solutions
-    if call.problem:
-        outcome = "wrong" if call.outcome == "wrong" else "discontinuous"
-        return outcome, f"with the perturbed seed: {call.problem}", returned
-    Q, position, rotation, problem = verify_solutions(robot, model, T, returned, tolerance)
-    all_position.append(position)
-    all_rotation.append(rotation)
-    if problem:
-        return "wrong", f"with the perturbed seed: {problem}", returned
-    if not len(Q):
-        return "discontinuous", "nothing returned for the perturbed seed", returned
-    distance, joint = _nearest_to_seed(robot, Q, seed)
-    if distance > CONTINUITY_DISTANCE:
-        return ("discontinuous", f"with the seed perturbed by +-{SEED_PERTURBATION} rad the "
-                f"nearest solution is {distance:.3f} from it on joint {joint + 1} (allowed "
-                f"{CONTINUITY_DISTANCE})", returned)
-    return "success", "", returned
+#: The former private name of :func:`~dhkin.validation.sample_checks.resolvable`.
+_resolvable = resolvable

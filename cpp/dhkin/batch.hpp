@@ -1,0 +1,179 @@
+// A batch of poses without 2pi copies (one solution per branch, its in-limit copy nearest the
+// seed), written straight into the caller's result arrays: the answer of expand(copies = false)
+// after solve_pose, pose by pose, bit for bit.
+//
+// Poses go by blocks of kLanes through the direct path in lanes (block.hpp); the nearest copy of
+// each branch is found in lanes too (copies.hpp), and a copy set onto a limit or whose branch
+// error is within kCopyMargin of the tolerance is verified again, one at a time, as expand does.
+// A pose the block declines goes through the pipeline and expand (pipeline.hpp, expand.hpp).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "dhkin/block.hpp"
+#include "dhkin/expand.hpp"
+#include "dhkin/pipeline.hpp"
+#include "dhkin/plan.hpp"
+
+namespace dhkin {
+
+// The caller's arrays for N poses: q (N, kBranches, kDof), valid, branch, flags (N, kBranches),
+// errors (N, kBranches, 2), projection and dropped (N). Slots a pose does not fill are left as
+// they are (the caller gives them zeros, and branch -1).
+struct NearestOutputs {
+  double* q;
+  bool* valid;
+  std::int16_t* branch;
+  std::uint8_t* flags;
+  double* errors;
+  double* projection;
+  std::int64_t* dropped;
+};
+
+// How a batch went: the first pose whose status is not usable (or -1) and that status, and the
+// most solutions of any pose.
+struct BatchReport {
+  long rejected = -1;
+  int status = 0;
+  int width = 0;
+};
+
+namespace batch {
+
+// Slot `slot` of pose i gets `solution`.
+inline void put(const NearestOutputs& out, std::size_t i, int slot, const Solution& solution) {
+  const std::size_t k = i * kBranches + static_cast<std::size_t>(slot);
+  for (int j = 0; j < kDof; ++j) out.q[k * kDof + j] = solution.q[j];
+  out.valid[k] = true;
+  out.branch[k] = static_cast<std::int16_t>(solution.branch);
+  out.flags[k] = solution.flags;
+  out.errors[2 * k] = solution.error.position;
+  out.errors[2 * k + 1] = solution.error.rotation;
+}
+
+// The nearest copies of a block's answered poses (expand's copies = false, in lanes): slot by
+// slot into `out`, poses first + l.
+inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tolerance,
+                        const NearestOutputs& out, std::size_t first, int count,
+                        BatchReport& report) {
+  const double slack = tolerance / plan.lever;
+  tolerance = plan.verification_tolerance(tolerance);
+  // by branch, then lane: the copies, whether each exists and must be verified again, the
+  // branch's errors and flags
+  alignas(64) double q[kBranches][kDof][kLanes];
+  alignas(64) double position[kBranches][kLanes], rotation[kBranches][kLanes];
+  alignas(64) std::int64_t exists[kBranches][kLanes], recheck[kBranches][kLanes];
+  alignas(64) std::int64_t flags[kBranches][kLanes];
+  for (int b = 0; b < kBranches; ++b) {
+    Mask found = answer.ok[b];
+    std::memcpy(exists[b], &found.v, sizeof exists[b]);
+    if (!any(found)) continue;
+    Mask clipped = every_lane<Lanes>(false);
+    for (int j = 0; j < kDof; ++j) {
+      const bool revolute = plan.revolute(j);
+      const Lanes value = answer.q[b][j];
+      const NearestTurn<Lanes> nearest =
+          nearest_turn(plan.limits[j], revolute, value, slack, answer.seed[j]);
+      found = found && nearest.exists;
+      const Lanes copy = placed(plan.limits[j], revolute, value, nearest.turn);
+      clipped = clipped || copy != shifted(revolute, value, nearest.turn);
+      copy.store(q[b][j]);
+    }
+    const Mask again = clipped || answer.errors[b].largest() > tolerance - kCopyMargin;
+    std::memcpy(exists[b], &found.v, sizeof exists[b]);
+    std::memcpy(recheck[b], &again.v, sizeof recheck[b]);
+    std::memcpy(flags[b], &answer.flags[b].v, sizeof flags[b]);
+    answer.errors[b].position.store(position[b]);
+    answer.errors[b].rotation.store(rotation[b]);
+  }
+  for (int l = 0; l < count; ++l) {
+    if (!answer.answered[l]) continue;
+    const std::size_t i = first + static_cast<std::size_t>(l);
+    int slot = 0;
+    for (int b = 0; b < kBranches; ++b) {
+      if (exists[b][l] == 0) continue;
+      Solution solution;
+      for (int j = 0; j < kDof; ++j) solution.q[j] = q[b][j][l];
+      solution.branch = b;
+      solution.flags = static_cast<std::uint8_t>(flags[b][l]);
+      solution.error = {position[b][l], rotation[b][l]};
+      if (recheck[b][l] != 0) {
+        solution.error = check(plan.chain, solution.q.data(), lane(answer.T_at, l));
+        if (!solution.error.within(tolerance)) continue;
+      }
+      put(out, i, slot++, solution);
+    }
+    out.projection[i] = answer.projection[l];
+    out.dropped[i] = 0;
+    report.width = std::max(report.width, slot);
+  }
+}
+
+// Pose i through the pipeline and expand(copies = false), into `out`.
+inline void put_pipeline(const Plan& plan, const TargetFrames& frames, const double* T,
+                         const Joints& seed, double tolerance, const NearestOutputs& out,
+                         std::size_t i, BatchReport& report) {
+  Branches branches;
+  PoseInfo info;
+  solve_branches(plan, frames, T, seed, tolerance, branches, info);
+  int slot = 0;
+  expand(plan, frames, T, seed, tolerance, false, branches, [&](const Solution& solution) {
+    put(out, i, slot++, solution);
+    return true;
+  });
+  out.projection[i] = info.projection;
+  out.dropped[i] = info.dropped;
+  report.width = std::max(report.width, slot);
+}
+
+}  // namespace batch
+
+// N poses (4 x 4 row-major, consecutive) with their seeds (kDof values each, `seed_stride`
+// apart: 0 for one seed for all) into `out`; stops at the first pose whose status is not usable
+// (report.rejected).
+inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, const double* T,
+                                 std::size_t n, const double* seeds, std::size_t seed_stride,
+                                 double tolerance, const NearestOutputs& out) {
+  BatchReport report;
+  const auto seed_of = [&](std::size_t i) {
+    Joints seed;
+    for (int j = 0; j < kDof; ++j) seed[j] = seeds[i * seed_stride + j];
+    return seed;
+  };
+  for (std::size_t first = 0; first < n; first += kLanes) {
+    PoseBlock poses;
+    poses.count = static_cast<int>(std::min<std::size_t>(kLanes, n - first));
+    for (int l = 0; l < poses.count; ++l) {
+      poses.T[l] = T + 16 * (first + l);
+      poses.seed[l] = seeds + (first + l) * seed_stride;
+    }
+    BlockAnswer answer;
+    if (!plan.refine) {
+      direct_block(plan, frames, poses, tolerance, answer);
+      batch::put_nearest(plan, answer, tolerance, out, first, poses.count, report);
+    }
+    for (int l = 0; l < poses.count; ++l) {
+      if (!plan.refine && answer.answered[l]) continue;
+      const std::size_t i = first + static_cast<std::size_t>(l);
+      const Joints seed = seed_of(i);
+      int status = plan.refine ? 0 : answer.status[l];
+      if (plan.refine) {
+        double projection = 0.0;
+        PoseTargets targets;
+        pose_targets(frames, T + 16 * i, seed, status, projection, targets);
+      }
+      if (status != kUsable) {
+        report.rejected = static_cast<long>(i);
+        report.status = status;
+        return report;
+      }
+      batch::put_pipeline(plan, frames, T + 16 * i, seed, tolerance, out, i, report);
+    }
+  }
+  return report;
+}
+
+}  // namespace dhkin

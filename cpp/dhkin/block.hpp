@@ -1,0 +1,144 @@
+// The direct path (direct.hpp) for kLanes poses of a batch at once, one pose per lane.
+//
+// The same steps as direct_branches, on the lane type: the poses' targets (one at a time), the
+// family's closed form (plan.solve_family on lanes), each branch's candidate wrapped and checked
+// by the exact chain's FK, the merge test and the flags. Every lane has the bits direct_branches
+// gives its pose; a lane it declines (a candidate near a singularity, one that does not verify as
+// computed, two branches with one solution) or rejects (the pose's status) is left to the caller,
+// which runs that pose through the pipeline (tests/test_ik_batch.py compares them).
+#pragma once
+
+#include <array>
+#include <cmath>
+
+#include "dhkin/direct.hpp"
+#include "dhkin/plan.hpp"
+#include "dhkin/simd.hpp"
+
+namespace dhkin {
+
+// kLanes poses: their targets and seeds by lane (a block of fewer poses repeats its last).
+struct PoseBlock {
+  int count = 0;                            // poses in the block
+  std::array<const double*, kLanes> T{};    // 4 x 4 row-major, base_link -> TCP
+  std::array<const double*, kLanes> seed{};  // kDof values
+};
+
+// What the direct path gives a block: per lane, whether it answered and the pose's status and
+// projection; per branch (lanes: poses), the verified solution, its errors and flags.
+struct BlockAnswer {
+  std::array<bool, kLanes> answered{};  // the direct path answered this pose (usable, regular)
+  std::array<int, kLanes> status{};     // a PoseStatus (kUsable or why not)
+  std::array<double, kLanes> projection{};
+  std::array<int, kLanes> candidates{};  // branches with a verified solution (answered lanes)
+  std::array<JointsT<Lanes>, kBranches> q{};
+  std::array<Mask, kBranches> ok{};
+  std::array<LaneBits, kBranches> flags{};
+  std::array<PoseErrorT<Lanes>, kBranches> errors{};
+  std::array<Lanes, kWhySize> why{};
+  JointsT<Lanes> seed{};
+  FrameT<Lanes> T_at;  // the targets of the plan's chains (errors are measured there)
+};
+
+namespace block {
+
+// Frames by lane from kLanes frames: entry (r, c) of every lane at once.
+struct FrameColumns {
+  alignas(64) double R[3][3][kLanes];
+  alignas(64) double p[3][kLanes];
+
+  void put(int l, const Frame& f) {
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R[r][c][l] = f.R[r][c];
+      p[r][l] = f.p[r];
+    }
+  }
+  FrameT<Lanes> frames() const {
+    FrameT<Lanes> out;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) out.R[r][c] = Lanes::load(R[r][c]);
+      out.p[r] = Lanes::load(p[r]);
+    }
+    return out;
+  }
+};
+
+}  // namespace block
+
+// check() of each branch's candidate q[b] (lanes: poses) against `target`, for the branches
+// `wanted` in some lane: every joint's sine and cosine first (independent work for the
+// processor to overlap), then each branch's chain.
+inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
+                           const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
+                           std::array<PoseErrorT<Lanes>, kBranches>& errors) {
+  const ChainShape shape(chain);
+  std::array<JointMotions<Lanes>, kBranches> motions;
+  for (int b = 0; b < kBranches; ++b) {
+    if (wanted[b]) joint_motions(chain, q[b].data(), motions[b]);
+  }
+  for (int b = 0; b < kBranches; ++b) {
+    if (wanted[b]) errors[b] = pose_error(chain_frame(chain, shape, motions[b]), target);
+  }
+}
+
+// Steps 1-3 of the direct path for a block of poses of an exact-family table (plan.refine
+// false; the caller checks).
+inline void direct_block(const Plan& plan, const TargetFrames& frames, const PoseBlock& poses,
+                         double tolerance, BlockAnswer& out) {
+  tolerance = plan.verification_tolerance(tolerance);
+  block::FrameColumns projected;
+  alignas(64) double seeds[kDof][kLanes];
+  Mask declined = every_lane<Lanes>(false);
+  for (int l = 0; l < kLanes; ++l) {
+    const int i = l < poses.count ? l : poses.count - 1;
+    Joints seed;
+    for (int j = 0; j < kDof; ++j) seed[j] = seeds[j][l] = poses.seed[i][j];
+    Frame pose;  // the identity where the pose is rejected
+    out.projection[l] = 0.0;
+    if (!projected_pose(poses.T[i], seed, out.status[l], out.projection[l], pose)) {
+      set_lane(declined, l, true);  // rejected: the caller reports it
+      for (int j = 0; j < kDof; ++j) seeds[j][l] = 0.0;
+    }
+    projected.put(l, pose);
+  }
+  for (int j = 0; j < kDof; ++j) out.seed[j] = Lanes::load(seeds[j]);
+  FrameT<Lanes> T_dh;
+  targets_of(frames, projected.frames(), T_dh, out.T_at);
+  CandidatesT<Lanes> found;
+  plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
+  out.why = found.why;
+  for (int b = 0; b < kBranches; ++b) declined = declined || (found.near[b] & kFree) != 0;
+  std::array<bool, kBranches> wanted{};
+  for (int b = 0; b < kBranches; ++b) {
+    out.ok[b] = found.valid[b] && !declined;
+    JointsT<Lanes>& q = out.q[b];
+    q = found.q[b];
+    plan.wrap_revolute(q);
+    wanted[b] = any(out.ok[b]);
+    // lanes without a candidate are checked on zeros (finite values; their errors are not used)
+    for (int j = 0; j < kDof && wanted[b]; ++j) q[j] = select(abs(q[j]) < INFINITY, q[j], Lanes(0.0));
+  }
+  check_branches(plan.chain, out.q, wanted, out.T_at, out.errors);
+  for (int b = 0; b < kBranches; ++b) {
+    declined = declined || (out.ok[b] && !out.errors[b].within(tolerance));
+  }
+  for (int a = 0; a < kBranches; ++a) {
+    for (int b = a + 1; b < kBranches; ++b) {
+      const Mask both = out.ok[a] && out.ok[b] && !declined;
+      if (any(both)) {  // one solution from two branches: the pipeline merges them
+        declined = declined || (both && plan.same(out.q[a], out.q[b], 2.0 * kMergeAngle));
+      }
+    }
+  }
+  for (int b = 0; b < kBranches; ++b) {
+    out.ok[b] = out.ok[b] && !declined;
+    out.flags[b] = (found.flags[b] & kShoulder) | plan.value_flags(out.q[b]);
+  }
+  for (int l = 0; l < kLanes; ++l) {
+    out.answered[l] = !lane(declined, l);
+    out.candidates[l] = 0;
+    for (int b = 0; b < kBranches; ++b) out.candidates[l] += lane(out.ok[b], l) ? 1 : 0;
+  }
+}
+
+}  // namespace dhkin

@@ -1,0 +1,152 @@
+"""dhkin's own complete IK validated in batches: the checks and figures of the pose-by-pose run
+(:mod:`dhkin.validation.run`), with the IK called once for all samples and the bookkeeping done
+on arrays.
+
+Used by :func:`~dhkin.validation.run.validate` for dhkin's own IK (``ik=None``) of a robot with
+a complete IK (a closed-form family or the general 6R solver), unless ``isolate`` asks for a
+child process. What changes is how the work is done, not what is checked:
+
+* **One call per pose, as before, made as a batch.** The IK under test is
+  ``robot.ik(T, q_seed=q)`` (:func:`~dhkin.validation.adapters.own_ik`); here
+  ``robot.ik_batch_detailed(targets, q_seed=q)`` answers every sample at once, pose by pose the
+  same solutions in the same order (tests/test_ik_batch.py and tests/test_validate.py assert
+  it). A batch that raises falls back on the guarded pose-by-pose run.
+* **Verification on arrays.** Every returned solution goes through Pinocchio on the reference
+  in one call; finite values, joint limits, residuals and the distance to the sampled q are
+  array operations. A sample that all of them clear (solutions returned, every one finite,
+  within the limits and within the tolerance plus the reference's deviation, one within
+  ``joint_tolerance`` of the sampled q) is a success; every other sample goes through the very
+  functions of the pose-by-pose run (:mod:`dhkin.validation.sample_checks`) with the same
+  answer, so that its outcome, detail and figures are those the pose-by-pose run gives.
+* **Branches: the answer itself.** The missing-branch check compares the returned solutions
+  with dhkin's own complete answer ``robot.ik(T, q_seed=q)``; for dhkin's own IK that is the
+  answer under test (the pose-by-pose run made the identical call twice), so every branch is
+  returned by construction: the samples are counted (``branch_checked``) without a second call.
+  For another IK (:func:`~dhkin.validation.validate` with ``ik=``) the branches are a second,
+  independent answer and the check runs pose by pose.
+* **Continuity.** The samples of the singular sets that succeeded are solved again in one batch
+  with their perturbed seeds; the nearest solution to each seed is found on arrays, and any
+  sample not cleared goes through :func:`~dhkin.validation.sample_checks.check_continuity`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dhkin.arm import Arm
+from dhkin.errors import DhkinError
+from dhkin.transforms import pose_error
+from dhkin.validation.calls import CallResult
+from dhkin.validation.matching import wrap
+from dhkin.validation.references import TargetModel
+from dhkin.validation.report import ValidationReport
+from dhkin.validation.sample_checks import check_continuity, check_sample
+from dhkin.validation.samples import CONTINUITY_DISTANCE, CONTINUITY_SETS
+from dhkin.validation.tally import Tally
+
+
+class Answers:
+    """The solutions of N poses from one batch, as flat rows: ``rows`` (M, dof) in pose order,
+    ``owner`` (M,) the pose of each row, ``starts`` (N + 1,) where each pose's rows begin."""
+
+    def __init__(self, robot: Arm, targets: NDArray[np.float64],
+                 seeds: NDArray[np.float64]) -> None:
+        batch = robot.ik_batch_detailed(targets, q_seed=seeds)
+        self.rows: NDArray[np.float64] = batch.q[batch.valid]
+        self.owner: NDArray[np.int64] = np.nonzero(batch.valid)[0]
+        counts = batch.valid.sum(axis=1)
+        self.counts: NDArray[np.int64] = counts
+        self.starts: NDArray[np.int64] = np.concatenate(([0], np.cumsum(counts)))
+
+    def of(self, k: int) -> NDArray[np.float64]:
+        """The solutions of pose k, (count, dof)."""
+        return self.rows[self.starts[k]:self.starts[k + 1]]
+
+    def call(self, k: int) -> CallResult:
+        """Pose k's answer as the guarded call reads dhkin's own IK's (a list of rows)."""
+        return CallResult(list(np.array(self.of(k), dtype=float, copy=True)))
+
+    def screen(self, robot: Arm, model: TargetModel, targets: NDArray[np.float64],
+               allowed: float) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                        NDArray[np.bool_]]:
+        """Residuals of every row on the reference (Pinocchio, one call; NaN for a row that is
+        not finite) and, per pose, whether it has solutions and every one is finite, within the
+        limits and within ``allowed``."""
+        finite = np.all(np.isfinite(self.rows), axis=1)
+        position, rotation = np.full(len(self.rows), np.nan), np.full(len(self.rows), np.nan)
+        if finite.any():
+            position[finite], rotation[finite] = pose_error(model.fk(self.rows[finite]),
+                                                            targets[self.owner[finite]])
+        bad = (~finite | ~robot.table.in_limits(self.rows) | ~(position <= allowed)
+               | ~(rotation <= allowed))
+        clean = (self.counts > 0) & (np.bincount(self.owner[bad], minlength=len(self.counts))
+                                     == 0)
+        return position, rotation, clean
+
+    def nearest(self, robot: Arm, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per pose, the largest joint difference (mod 2pi) of its finite row nearest ``q[k]``
+        (inf for a pose without one)."""
+        closest = np.full(len(self.counts), np.inf)
+        finite = np.all(np.isfinite(self.rows), axis=1)
+        rows, owner = self.rows[finite], self.owner[finite]
+        np.minimum.at(closest, owner, np.abs(wrap(robot, rows - q[owner])).max(axis=1))
+        return closest
+
+
+def check_all_batched(robot: Arm, model: TargetModel, q: NDArray[np.float64], sets: list[str],
+                      perturbed: NDArray[np.float64], targets: NDArray[np.float64],
+                      labels: list[str], tolerance: float, joint_tolerance: float,
+                      report: ValidationReport) -> bool:
+    """Check every sample with dhkin's own IK answering in batches (see the module docstring);
+    fill the report as the pose-by-pose run does. False (nothing filled) when the batch
+    raises: the caller then runs pose by pose."""
+    try:
+        first = Answers(robot, targets, q)
+    except DhkinError:
+        return False
+    allowed = tolerance + model.deviation
+    position, rotation, clean = first.screen(robot, model, targets, allowed)
+    # The own IK takes q_seed, so every joint is compared (sample_checks.compared_joints).
+    success = clean & (first.nearest(robot, q) <= joint_tolerance)
+    n = len(sets)
+    outcome = np.where(success, "success", "").astype(object)
+    detail: list[str] = [""] * n
+    tally = Tally()
+    tally.residuals(position[success[first.owner]], rotation[success[first.owner]])
+    row_errors: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+    for k in np.flatnonzero(~success).tolist():
+        checked, _ = check_sample(robot, model, q[k], targets[k], first.call(k), tolerance,
+                                  joint_tolerance, True)
+        outcome[k], detail[k] = checked.outcome, checked.detail
+        row_errors[k] = (checked.position, checked.rotation)
+        tally.residuals(checked.position, checked.rotation)
+    # Branches: dhkin's own complete answer is the answer under test (module docstring).
+    succeeded = outcome == "success"
+    report.branch_checked = int(succeeded.sum())
+    in_sets = np.array([s in CONTINUITY_SETS for s in sets], dtype=bool)
+    moved = np.flatnonzero(succeeded & in_sets & np.all(np.isfinite(perturbed), axis=1))
+    report.continuity_checked = len(moved)
+    returned_perturbed: dict[int, list[NDArray[np.float64]]] = {}
+    if len(moved):
+        second = Answers(robot, targets[moved], perturbed[moved])
+        position2, rotation2, clean2 = second.screen(robot, model, targets[moved], allowed)
+        continuous = clean2 & (second.nearest(robot, perturbed[moved]) <= CONTINUITY_DISTANCE)
+        tally.residuals(position2[continuous[second.owner]], rotation2[continuous[second.owner]])
+        for j in np.flatnonzero(~continuous).tolist():
+            m = int(moved[j])
+            outcome[m], detail[m], returned_perturbed[m] = check_continuity(
+                robot, model, second.call(j), targets[m], perturbed[m], tolerance, tally)
+    for k in range(n):
+        if outcome[k] == "success":
+            tally.count(sets[k], labels[k], "success", int(first.counts[k]))
+            continue
+        errors = row_errors.get(k)
+        if errors is None:  # succeeded first, then failed the continuity call
+            rows = slice(first.starts[k], first.starts[k + 1])
+            errors = (position[rows], rotation[rows])
+        tally.add(report, k, sets[k], labels[k], str(outcome[k]), detail[k], q[k], targets[k],
+                  first.call(k).solutions, errors[0], errors[1], perturbed[k],
+                  returned_perturbed.get(k, []), [])
+    tally.finish(report)
+    return True

@@ -25,6 +25,17 @@ constexpr int kWalkSteps = 100;
 // straight segment of solutions (a free pair of coincident axes, q_i +- q_j fixed) passes at
 // all, a chord across a curved set or between two distinct roots fails near its middle.
 constexpr int kSegmentPoints = 7;
+// A step of walk from a point on a curve of solutions (the Jacobian's smallest singular value at
+// most the tolerance: a step of up to a radian along the weakest direction moves the pose less
+// than the tolerance at first order, and a point of a true curve shows ~1e-15) stays on that
+// curve when the chord's midpoint, refined by Newton, lands within kChordBend of the chord's
+// length of it: on a curve of radius r a chord of length L bends L^2 / (8 r) from it, within a
+// quarter of L for every chord up to the curve's diameter; a jump between two distinct roots
+// puts the refined midpoint on one of them, half the chord from it (or nowhere). From an
+// isolated root whose smallest singular value is above the tolerance (near a fold: 3e-8 on the
+// IRB 1200's split elbow roots, whose near-solutions join them in a valley within the
+// tolerance) the chord's midpoint itself must verify.
+constexpr double kChordBend = 0.25;
 // Newton's budget for a member (it converges slowly at a singular root).
 constexpr int kMemberBudget = 4 * newton::kMaxSteps;
 
@@ -42,8 +53,9 @@ inline double squared_distance(const Joints& a, const Joints& b) {
 // nearer the seed and stays on the same root (the midpoint of the step verifies too: near a fold
 // Newton could land on a distinct root nearer the seed); a failed step is retried a quarter as
 // long, down to `band`, and the walk ends where the seed's offset along the weak directions is
-// within `tolerance` (rad). Then polished by monotone Newton steps. `error`: the residuals of the
-// final q, where it moved.
+// within `tolerance` (rad). On a curve of solutions a step stays on it when its refined midpoint
+// lies near its chord (kChordBend). Then polished by monotone Newton steps. `error`: the
+// residuals of the final q, where it moved.
 inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joints& seed,
                  double tolerance, double lever, double band, PoseError& error) {
   double distance = squared_distance(q, seed);
@@ -66,9 +78,25 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     refine(chain, target, trial, JointMask{}, tolerance, {kMemberBudget, newton::kGrowth, 0.0});
     const PoseError trial_error = check(chain, trial.data(), target);
     const double trial_distance = squared_distance(trial, seed);
-    for (int j = 0; j < kDof; ++j) middle[j] = q[j] + 0.5 * wrap(trial[j] - q[j]);
-    const bool between = check(chain, middle.data(), target).within(tolerance);
-    if (!(trial_error.within(tolerance) && trial_distance < distance && between)) {
+    double chord = 0.0;
+    for (int j = 0; j < kDof; ++j) {
+      middle[j] = q[j] + 0.5 * wrap(trial[j] - q[j]);
+      chord = std::max(chord, std::abs(wrap(trial[j] - q[j])));
+    }
+    bool kept = trial_error.within(tolerance) && trial_distance < distance && chord > 0.0;
+    if (kept && svd.singularValues()(kDof - 1) > tolerance) {
+      // an isolated (near-)singular root's cloud: the midpoint itself verifies
+      kept = check(chain, middle.data(), target).within(tolerance);
+    } else if (kept) {
+      // on a curve of solutions: the refined midpoint stays near the chord
+      const Joints midpoint = middle;
+      refine(chain, target, middle, JointMask{}, tolerance,
+             {kMemberBudget, newton::kMonotone, 0.0});
+      double moved = 0.0;
+      for (int j = 0; j < kDof; ++j) moved = std::max(moved, std::abs(wrap(middle[j] - midpoint[j])));
+      kept = check(chain, middle.data(), target).within(tolerance) && moved <= kChordBend * chord;
+    }
+    if (!kept) {
       length = 0.25 * std::min(length, longest);
       if (length <= band) break;
       continue;

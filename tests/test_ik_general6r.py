@@ -418,3 +418,29 @@ def test_general_solver_imports_no_jit_compiler() -> None:
                          timeout=300)
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "False"
+
+
+def test_batch_is_the_single_calls_in_the_core() -> None:
+    """ik_batch of a general 6R arm runs its pose loop in the compiled core: the same rows as
+    one ik per pose (seeded per pose, every copy too), whatever the chunks and worker threads
+    (each pose is solved alone); a bad pose raises naming its index."""
+    from dhkin.errors import InputError
+    from dhkin.ik.workers import POSES_PER_WORKER
+
+    robot = dhkin.load("xarm6")
+    rng = np.random.default_rng(26)
+    Q = robot.table.random_q(2 * POSES_PER_WORKER + 3, rng)
+    T = robot.fk(Q)
+    seeds = Q + 0.01
+    one = [robot.ik(t, q) for t, q in zip(T, seeds, strict=True)]
+    for workers, chunk in ((1, 65536), (2, 700)):
+        q, valid = robot.ik_batch(T, seeds, workers=workers, chunk_size=chunk)
+        for k, result in enumerate(one):
+            assert np.array_equal(q[k][valid[k]], result.q)
+    every, valid = robot.ik_batch(T[:20], copies=True)
+    for k in range(20):
+        assert np.array_equal(every[k][valid[k]], robot.ik(T[k], copies=True).q)
+    bad = T[:5].copy()
+    bad[3, 0, 0] = np.nan
+    with pytest.raises(InputError, match=r"T\[3\]"):
+        robot.ik_batch(bad)

@@ -206,9 +206,9 @@ class Robot:
         up to 256 or more per pose: see :meth:`ik_batch_chunks` for very large batches).
         ``workers`` threads share the poses (default: the CPUs this process may use; the
         result does not depend on it). Without a closed-form family the general 6R solver
-        answers pose by pose (a loop; ``chunk_size`` and ``workers`` do not apply), and where
-        that does not apply the numerical solver (``copies``, ``chunk_size`` and ``workers``
-        do not apply).
+        answers (its pose loop in the compiled core, shared among ``workers`` the same way), and
+        where that does not apply the numerical solver (``copies``, ``chunk_size`` and
+        ``workers`` do not apply).
         """
         if self._closed_form_solver is None and self.general_solver is None:
             return self.numerical_solver().solve_batch(T, q_seed, tolerance=tolerance, tcp=tcp)

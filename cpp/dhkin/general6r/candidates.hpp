@@ -5,9 +5,9 @@
 // theta_k = lead + pi must be invertible: of the four angles shift + {0, 1, 2, 3} pi/2 the first
 // whose matrix is conditioned within kLeadCondition becomes lead (else the best of them), so
 // that no root lies at infinity unless all four are roots. The eigenvalues come from the
-// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, Eigen's EigenSolver) where A is well
-// conditioned, else from QZ on the pencil (Eigen's GeneralizedEigenSolver, real QZ: backward
-// stable, it keeps the eigenvalues of the regular part). Where no leading matrix is well
+// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp) where A is well
+// conditioned, else from QZ on the pencil (Eigen's real QZ: backward stable, it keeps the
+// eigenvalues of the regular part). Where no leading matrix is well
 // conditioned, or a cluster holds more than kMaxSplit eigenvalues, the pose is solved moved
 // (all_candidates).
 #pragma once
@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "dhkin/general6r/back_substitution.hpp"
+#include "dhkin/general6r/eigenvalues.hpp"
 #include "dhkin/general6r/elimination.hpp"
 #include "dhkin/general6r/null_space.hpp"
 
@@ -97,42 +98,6 @@ inline double reciprocal_condition(const Matrix12& M, Matrix12& inverse) {
   return ratio > 0.0 ? ratio : 0.0;  // NaN (an exactly singular M): 0
 }
 
-// Radix of the balancing scale factors (powers of two: scaling is exact).
-constexpr double kRadix = 2.0;
-// A row and column pair is rescaled when that shrinks their combined norm below this fraction.
-constexpr double kBalanceGain = 0.95;
-
-// K balanced in place by a diagonal similarity D^-1 K D (Parlett and Reinsch, as LAPACK's
-// dgebal, which dgeev runs first): each row and its column brought to comparable norms by
-// powers of two. The eigenvalues are K's; their computed accuracy is not: the companion of a
-// badly scaled M(x) unbalanced lost two real roots 5.5e-11 apart (a CRX-10iA pose at a joint
-// limit) into one complex pair, balanced it keeps them apart.
-template <class Square>
-void balance(Square& K) {
-  const int n = static_cast<int>(K.rows());
-  for (bool done = false; !done;) {
-    done = true;
-    for (int i = 0; i < n; ++i) {
-      double column = 0.0, row = 0.0;
-      for (int j = 0; j < n; ++j) {
-        if (j == i) continue;
-        column += std::abs(K(j, i));
-        row += std::abs(K(i, j));
-      }
-      if (column == 0.0 || row == 0.0) continue;
-      const double total = column + row;
-      double factor = 1.0;
-      for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
-      for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
-      if ((column + row) / factor < kBalanceGain * total) {
-        done = false;
-        K.row(i) /= factor;
-        K.col(i) *= factor;
-      }
-    }
-  }
-}
-
 // A near-real eigenvalue as the angle of the eliminated joint (relative to lead).
 struct Angle {
   double real = 0.0, imaginary = 0.0;
@@ -201,17 +166,13 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   const double cs = std::cos(lead), sn = std::sin(lead);
   const Matrix12 B = stacked(2.0 * (Ps * cs - Pc * sn) * el.half2);
   const Matrix12 C = M_at(lead);
-  using Matrix24 = Eigen::Matrix<double, kEigenvalues, kEigenvalues>;
-  Eigen::Matrix<std::complex<double>, kEigenvalues, 1> eigenvalues;
+  Eigenvalues eigenvalues;
   if (best >= kLeadCondition) {
     Matrix24 companion = Matrix24::Zero();
     companion.topRightCorner<kMonomials, kMonomials>().setIdentity();
     companion.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
     companion.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
-    balance(companion);
-    const Eigen::EigenSolver<Matrix24> eigen(companion, false);
-    if (eigen.info() != Eigen::Success) return info;
-    eigenvalues = eigen.eigenvalues();
+    if (!matrix_eigenvalues(companion, eigenvalues)) return info;
   } else {
     if (!solve_ill) return info;
     Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();
@@ -219,13 +180,7 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
     left.bottomLeftCorner<kMonomials, kMonomials>() = -C;
     left.bottomRightCorner<kMonomials, kMonomials>() = -B;
     right_matrix.bottomRightCorner<kMonomials, kMonomials>() = A;
-    const Eigen::GeneralizedEigenSolver<Matrix24> qz(left, right_matrix, false);
-    if (qz.info() != Eigen::Success) return info;
-    for (int i = 0; i < kEigenvalues; ++i) {
-      const double beta = qz.betas()(i);
-      eigenvalues(i) = beta != 0.0 ? qz.alphas()(i) / beta
-                                   : std::complex<double>(INFINITY, 0.0);
-    }
+    if (!pencil_eigenvalues(left, right_matrix, eigenvalues)) return info;
   }
   // near-real eigenvalues as angles, sorted by the real part
   std::array<Angle, kEigenvalues> angles;

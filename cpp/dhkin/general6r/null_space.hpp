@@ -115,14 +115,42 @@ inline bool null_vector(const Matrix12& A, const Matrix12& B, const Matrix12& C,
   return true;
 }
 
-// The m right singular vectors of M at the half angle `half` with the smallest singular values
-// (the null space of an eigenvalue shared by m roots); false if M is not finite.
+// Block inverse iteration's steps for the null space of an eigenvalue shared by m roots: the
+// steps of a simple eigenvalue's (kInverseIterations), and one more for the block's start, which
+// is not a vector of ones along one direction but m generic directions.
+constexpr int kBlockIterations = kInverseIterations + 1;
+
+// An orthonormal basis of the null space of M at the half angle `half` shared by m roots (its
+// computed copies lie within rounding of each other), into out (12 x m): block inverse iteration
+// from m fixed generic directions (one LU, lu_factor; each step multiplies the components
+// outside the m directions of smallest |eigenvalue| of M by at least their ratio to the next,
+// ~1e-5 at a double root beside a close cluster, far less at an exact one), the columns kept
+// orthonormal by Gram-Schmidt, twice. False if M is not finite or the iteration breaks down.
 inline bool null_space(const Matrix12& A, const Matrix12& B, const Matrix12& C, double half,
                        int m, Basis& out) {
-  const Matrix12 M = homogeneous(A, B, C, half);
+  Matrix12 M = homogeneous(A, B, C, half);
   if (!M.allFinite()) return false;
-  const Eigen::JacobiSVD<Matrix12> svd(M, Eigen::ComputeFullV);
-  out = svd.matrixV().rightCols(m);
+  std::array<int, kMonomials> pivots;
+  lu_factor(M, pivots);
+  out.resize(kMonomials, m);
+  for (int c = 0; c < m; ++c) {  // generic directions: no monomial pattern, independent
+    for (int i = 0; i < kMonomials; ++i) out(i, c) = std::cos(1.0 + (i + 1) * (c + 0.6180339887));
+  }
+  for (int step = 0; step < kBlockIterations; ++step) {
+    for (int c = 0; c < m; ++c) {
+      Vector12 column = out.col(c);
+      lu_solve(M, pivots, column);
+      out.col(c) = column;
+    }
+    for (int c = 0; c < m; ++c) {
+      for (int pass = 0; pass < 2; ++pass) {
+        for (int d = 0; d < c; ++d) out.col(c) -= out.col(d).dot(out.col(c)) * out.col(d);
+      }
+      const double size = out.col(c).norm();
+      if (!(size > 0.0 && size < INFINITY)) return false;
+      out.col(c) /= size;
+    }
+  }
   return true;
 }
 

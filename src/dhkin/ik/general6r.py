@@ -253,14 +253,10 @@ class General6RSolver:
             target, seed, tolerance, copies, self._tcp(tcp))
         if outcome == REJECTED:
             raise InputError(pose_error_message("T", target, status), field="T")
-        q, residuals, singular = rows
         if outcome == SOLVED:
-            turns = np.rint(q * (1.0 / TWO_PI)).astype(np.int64).tolist()
-            return IKSolutions(q=q, configurations=tuple(map(self._configuration,
-                                                             map(tuple, turns))),
-                               flags=tuple(_SINGULAR if s else _REGULAR for s in singular),
-                               residuals=residuals, family=self.family, dropped=failed,
-                               projection=projection)
+            q, residuals, singular = rows
+            return IKSolutions.from_core(_Settled(q, residuals, singular, projection, failed),
+                                         self.family, self._configure)
         return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
                            dropped=failed, reason=self._reason(outcome, distance, failed,
                                                                verified, tolerance))
@@ -351,6 +347,10 @@ class General6RSolver:
                        branch_labels=self.branch_labels, family=self.family,
                        residuals=residuals, projection=projection, dropped=dropped)
 
+    def _configure(self, branch: int, turns: tuple[int, ...]) -> Configuration:
+        """A solution's Configuration (one branch: the general solver has no labels)."""
+        return self._configuration(turns)
+
     def _configuration(self, turns: tuple[int, ...]) -> Configuration:
         found = self._configurations.get(turns)
         if found is None:
@@ -359,5 +359,26 @@ class General6RSolver:
         return found
 
 
-_REGULAR: frozenset[str] = frozenset()
-_SINGULAR: frozenset[str] = frozenset({"singular"})
+class _Settled:
+    """One pose's solutions from the core, as :meth:`IKSolutions.from_core` reads them (its
+    configurations, flags and residuals built when first asked for)."""
+
+    __slots__ = ("_q", "_residuals", "_singular", "count", "dropped", "projection")
+
+    def __init__(self, q: NDArray[np.float64], residuals: NDArray[np.float64],
+                 singular: NDArray[np.uint8], projection: float, dropped: int) -> None:
+        self._q, self._residuals, self._singular = q, residuals, singular
+        self.count, self.projection, self.dropped = q.shape[0], projection, dropped
+
+    def q(self) -> NDArray[np.float64]:
+        return self._q
+
+    def residuals(self) -> NDArray[np.float64]:
+        return self._residuals
+
+    def flags(self) -> NDArray[np.uint8]:
+        return np.where(self._singular != 0, SINGULAR, 0).astype(np.uint8)
+
+    def configuration_keys(self) -> list[tuple[int, tuple[int, ...]]]:
+        turns = np.rint(self._q * (1.0 / TWO_PI)).astype(np.int64).tolist()
+        return [(0, tuple(t)) for t in turns]

@@ -228,7 +228,8 @@ class General6R {
 
   // N poses (N, 4, 4) with seeds (1 or N, 6): (q (R, 6), errors (R, 2), singular (R,),
   // counts (N,), projection (N,), dropped (N,), first rejected pose or -1, its status).
-  nb::tuple solve_batch(Input<double, nb::shape<-1, 4, 4>> T, Input<double, nb::shape<-1, kDof>> seeds,
+  nb::tuple solve_batch(Input<double, nb::shape<-1, 4, 4>> T,
+                        Input<double, nb::shape<-1, kDof>> seeds,
                         double tolerance, bool copies, const nb::object& tcp) const {
     const std::size_t n = T.shape(0);
     if (seeds.shape(0) != 1 && seeds.shape(0) != n) {

@@ -93,7 +93,9 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
       refine(chain, target, middle, JointMask{}, tolerance,
              {kMemberBudget, newton::kMonotone, 0.0});
       double moved = 0.0;
-      for (int j = 0; j < kDof; ++j) moved = std::max(moved, std::abs(wrap(middle[j] - midpoint[j])));
+      for (int j = 0; j < kDof; ++j) {
+        moved = std::max(moved, std::abs(wrap(middle[j] - midpoint[j])));
+      }
       kept = check(chain, middle.data(), target).within(tolerance) && moved <= kChordBend * chord;
     }
     if (!kept) {

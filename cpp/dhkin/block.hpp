@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstring>
 
 #include "dhkin/direct.hpp"
 #include "dhkin/plan.hpp"
@@ -65,19 +66,82 @@ struct FrameColumns {
 
 }  // namespace block
 
+namespace block {
+
+// Whether a and b hold the same bits in every lane.
+DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_of(a) != bits_of(b)); }
+
+}  // namespace block
+
 // check() of each branch's candidate q[b] (lanes: poses) against `target`, for the branches
 // `wanted` in some lane: every joint's sine and cosine first (independent work for the
-// processor to overlap), then each branch's chain.
+// processor to overlap), then each branch's chain. Branches share joint values (the two wrist
+// branches of a spherical wrist share q1-q3, the four branches of one shoulder q1): a joint value
+// with the bits of an earlier branch's, in every lane, takes that branch's sine and cosine, and a
+// branch whose first k joint values are an earlier branch's starts from that branch's frame after
+// k joints. The same operations on the same values as check() per branch, so the same bits.
 inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
                            const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
                            std::array<PoseErrorT<Lanes>, kBranches>& errors) {
+  using block::same_bits;
   const ChainShape shape(chain);
+  const int n = chain.dof();
   std::array<JointMotions<Lanes>, kBranches> motions;
+  // per branch: the earliest wanted branch with the longest run of equal leading joint values
+  // (source, -1 for none) and that run's length (shared); `keep` bit k: a later branch starts
+  // from this branch's frame after k joints
+  int source[kBranches], shared[kBranches];
+  unsigned keep[kBranches] = {};
   for (int b = 0; b < kBranches; ++b) {
-    if (wanted[b]) joint_motions(chain, q[b].data(), motions[b]);
+    source[b] = -1, shared[b] = 0;
+    if (!wanted[b]) continue;
+    for (int a = 0; a < b; ++a) {
+      if (!wanted[a]) continue;
+      int k = 0;
+      while (k < n && same_bits(q[a][k], q[b][k])) ++k;
+      if (k > shared[b]) shared[b] = k, source[b] = a;
+    }
+    for (int j = 0; j < n; ++j) {
+      int from = -1;
+      for (int a = 0; a < b && from < 0; ++a) {
+        if (wanted[a] && same_bits(q[a][j], q[b][j])) from = a;
+      }
+      if (from < 0) {
+        joint_motion(chain, j, q[b][j], motions[b]);
+      } else {
+        motions[b].turn[j] = motions[from].turn[j];
+        motions[b].variable[j] = motions[from].variable[j];
+      }
+    }
+    if (source[b] >= 0) keep[source[b]] |= 1u << shared[b];
   }
+  // the frames after `shared[b]` joints that branch b starts from (raw copies: no initialisation)
+  alignas(64) unsigned char start[kBranches][sizeof(FrameT<Lanes>)];
   for (int b = 0; b < kBranches; ++b) {
-    if (wanted[b]) errors[b] = pose_error(chain_frame(chain, shape, motions[b]), target);
+    if (!wanted[b]) continue;
+    FrameT<Lanes> state;
+    int first = 0;
+    // (a branch's own start lies before every frame kept from it: a later branch sharing no
+    // more than that would have taken this branch's source; checked all the same)
+    if (source[b] >= 0 && (keep[b] >> shared[b]) << shared[b] == keep[b] &&
+        (keep[b] & (1u << shared[b])) == 0) {
+      std::memcpy(static_cast<void*>(&state), start[b], sizeof state);
+      first = shared[b];
+    } else {
+      state = broadcast<Lanes>(chain.joints[0].before);
+    }
+    for (int j = first; j < n; ++j) {
+      chain_step(chain, shape, motions[b], j, state);
+      if ((keep[b] >> (j + 1)) & 1u) {
+        for (int c = b + 1; c < kBranches; ++c) {
+          if (source[c] == b && shared[c] == j + 1) {
+            std::memcpy(start[c], static_cast<const void*>(&state), sizeof state);
+          }
+        }
+      }
+    }
+    times_constant(state, chain.tail, shape.tail);
+    errors[b] = pose_error(state, target);
   }
 }
 
@@ -86,24 +150,29 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
 inline void direct_block(const Plan& plan, const TargetFrames& frames, const PoseBlock& poses,
                          double tolerance, BlockAnswer& out) {
   tolerance = plan.verification_tolerance(tolerance);
-  block::FrameColumns projected;
+  block::FrameColumns raw;
   alignas(64) double seeds[kDof][kLanes];
   Mask declined = every_lane<Lanes>(false);
   for (int l = 0; l < kLanes; ++l) {
     const int i = l < poses.count ? l : poses.count - 1;
     Joints seed;
     for (int j = 0; j < kDof; ++j) seed[j] = seeds[j][l] = poses.seed[i][j];
-    Frame pose;  // the identity where the pose is rejected
-    out.projection[l] = 0.0;
-    if (!projected_pose(poses.T[i], seed, out.status[l], out.projection[l], pose)) {
+    out.status[l] = pose_and_seed_status(poses.T[i], seed);
+    if (out.status[l] == kUsable) {
+      raw.put(l, raw_frame(poses.T[i]));
+    } else {
+      raw.put(l, Frame{});  // the identity where the pose is rejected
       set_lane(declined, l, true);  // rejected: the caller reports it
       for (int j = 0; j < kDof; ++j) seeds[j][l] = 0.0;
     }
-    projected.put(l, pose);
   }
   for (int j = 0; j < kDof; ++j) out.seed[j] = Lanes::load(seeds[j]);
+  // the rotations projected, every lane at once (projected_pose's, lane by lane)
+  Lanes moved;
+  const FrameT<Lanes> projected = projected_frame<Lanes>(raw.frames(), !declined, moved);
+  for (int l = 0; l < kLanes; ++l) out.projection[l] = lane(declined, l) ? 0.0 : lane(moved, l);
   FrameT<Lanes> T_dh;
-  targets_of(frames, projected.frames(), T_dh, out.T_at);
+  targets_of(frames, projected, T_dh, out.T_at);
   CandidatesT<Lanes> found;
   plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
   out.why = found.why;

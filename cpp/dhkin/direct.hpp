@@ -115,12 +115,15 @@ inline bool direct_branch_lanes(const Plan& plan, const TargetFrames& frames, co
     branches.errors[b] = {position[b], rotation[b]};
     ++info.candidates;
   }
-  for (int a = 0; a < kBranches; ++a) {
-    for (int b = a + 1; b < kBranches; ++b) {
-      if (branches.ok[a] && branches.ok[b] &&
-          plan.same(branches.q[a], branches.q[b], 2.0 * kMergeAngle)) {
-        return false;  // one solution from two branches: the pipeline merges them
-      }
+  // every pair of branches a < b at once: lane a against lane b = a ^ m, for m = 1..7
+  alignas(64) static const double kIndex[kLanes] = {0, 1, 2, 3, 4, 5, 6, 7};
+  const Lanes index = Lanes::load(kIndex);
+  for (int m = 1; m < kBranches; ++m) {
+    JointsT<Lanes> other;
+    for (int j = 0; j < kDof; ++j) other[j] = swapped(q[j], m);
+    const Mask pair = found.valid && swapped(found.valid, m) && index < swapped(index, m);
+    if (any(pair && plan.same(q, other, 2.0 * kMergeAngle))) {
+      return false;  // one solution from two branches: the pipeline merges them
     }
   }
   for (int b = 0; b < kBranches; ++b) {

@@ -166,16 +166,26 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
         !seeded_wrist[b + 1]) {
       continue;
     }
-    // free: the member half a turn from either seed's member verifies, or from the branch's
-    // regular root (where one half turn has no member: at a second singularity, e.g. a stretched
-    // elbow, the family leaves the reach on an arc, and its members there are moved onto it)
-    bool free = family_free(plan, T_dh, T_at, branches.q[b], b, clamp, tolerance) ||
-                family_free(plan, T_dh, T_at, branches.q[b + 1], b + 1, clamp, tolerance);
-    if (!free && regular.valid[b] &&
-        settle_free(plan, T_at, regular.q[b], candidate, fixed,
-                    (regular.near[b] & kClamped) != 0, false, tolerance)
-            .within(tolerance)) {
-      free = family_free(plan, T_dh, T_at, candidate, b, clamp, tolerance);
+    // free: the member half a turn from a wrist branch's regular root (settled on the exact
+    // chain) verifies. Tested from the regular roots, which the seed does not move, so that the
+    // answer's branches do not depend on the seed; from the seed's members only where neither
+    // regular root settles. (Either wrist branch's root: at a second singularity, e.g. a
+    // stretched elbow, one half turn may have no member, the family leaving the reach on an
+    // arc.)
+    bool free = false;
+    bool probed = false;
+    for (int w = b; w <= b + 1 && !free; ++w) {
+      if (regular.valid[w] &&
+          settle_free(plan, T_at, regular.q[w], candidate, fixed,
+                      (regular.near[w] & kClamped) != 0, false, tolerance)
+              .within(tolerance)) {
+        probed = true;
+        free = family_free(plan, T_dh, T_at, candidate, w, clamp, tolerance);
+      }
+    }
+    if (!probed) {
+      free = family_free(plan, T_dh, T_at, branches.q[b], b, clamp, tolerance) ||
+             family_free(plan, T_dh, T_at, branches.q[b + 1], b + 1, clamp, tolerance);
     }
     if (free) {  // one family at the tolerance: one solution (the members may differ where the
       branches.ok[b + 1] = false;  // seed's member was moved onto the reach)

@@ -31,7 +31,6 @@ struct BlockAnswer {
   std::array<bool, kLanes> answered{};  // the direct path answered this pose (usable, regular)
   std::array<int, kLanes> status{};     // a PoseStatus (kUsable or why not)
   std::array<double, kLanes> projection{};
-  std::array<int, kLanes> candidates{};  // branches with a verified solution (answered lanes)
   std::array<JointsT<Lanes>, kBranches> q{};
   std::array<Mask, kBranches> ok{};
   std::array<LaneBits, kBranches> flags{};
@@ -108,9 +107,9 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
       }
       if (from < 0) {
         joint_motion(chain, j, q[b][j], motions[b]);
-      } else {
-        motions[b].turn[j] = motions[from].turn[j];
+      } else {  // joint_motion's outputs: the variable, and the turn of a revolute joint
         motions[b].variable[j] = motions[from].variable[j];
+        if (chain.joints[j].revolute) motions[b].turn[j] = motions[from].turn[j];
       }
     }
     if (source[b] >= 0) keep[source[b]] |= 1u << shared[b];
@@ -205,8 +204,6 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   }
   for (int l = 0; l < kLanes; ++l) {
     out.answered[l] = !lane(declined, l);
-    out.candidates[l] = 0;
-    for (int b = 0; b < kBranches; ++b) out.candidates[l] += lane(out.ok[b], l) ? 1 : 0;
   }
 }
 

@@ -289,7 +289,9 @@ DHKIN_INLINE Lanes swapped(const Lanes& a, int m) {
   const __m512i index = _mm512_xor_si512(_mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0),
                                          _mm512_set1_epi64(m));
   Lanes out;
-  out.v[0] = (simd::Doubles)_mm512_permutexvar_pd(index, (__m512d)a.v[0]);
+  // the masked form with every lane set (the plain one trips GCC 12's -Wmaybe-uninitialized)
+  out.v[0] = (simd::Doubles)_mm512_mask_permutexvar_pd((__m512d)a.v[0], 0xFF, index,
+                                                       (__m512d)a.v[0]);
   return out;
 #else
   Lanes out;

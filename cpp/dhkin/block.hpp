@@ -10,7 +10,7 @@
 
 #include <array>
 #include <cmath>
-#include <cstring>
+#include <new>
 
 #include "dhkin/direct.hpp"
 #include "dhkin/plan.hpp"
@@ -63,10 +63,6 @@ struct FrameColumns {
   }
 };
 
-}  // namespace block
-
-namespace block {
-
 // Whether a and b hold the same bits in every lane.
 DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_of(a) != bits_of(b)); }
 
@@ -78,7 +74,8 @@ DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_o
 // branches of a spherical wrist share q1-q3, the four branches of one shoulder q1): a joint value
 // with the bits of an earlier branch's, in every lane, takes that branch's sine and cosine, and a
 // branch whose first k joint values are an earlier branch's starts from that branch's frame after
-// k joints. The same operations on the same values as check() per branch, so the same bits.
+// k joints; the frames advance joint by joint for all branches together. The same operations on
+// the same values as check() per branch, so the same bits.
 inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
                            const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
                            std::array<PoseErrorT<Lanes>, kBranches>& errors) {
@@ -87,10 +84,10 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
   const int n = chain.dof();
   std::array<JointMotions<Lanes>, kBranches> motions;
   // per branch: the earliest wanted branch with the longest run of equal leading joint values
-  // (source, -1 for none) and that run's length (shared); `keep` bit k: a later branch starts
-  // from this branch's frame after k joints
+  // (source, -1 for none) and that run's length (shared). A source shares fewer joints with its
+  // own source than with the branch: a branch sharing no more than that would have taken the
+  // earlier one.
   int source[kBranches], shared[kBranches];
-  unsigned keep[kBranches] = {};
   for (int b = 0; b < kBranches; ++b) {
     source[b] = -1, shared[b] = 0;
     if (!wanted[b]) continue;
@@ -112,35 +109,30 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
         if (chain.joints[j].revolute) motions[b].turn[j] = motions[from].turn[j];
       }
     }
-    if (source[b] >= 0) keep[source[b]] |= 1u << shared[b];
   }
-  // the frames after `shared[b]` joints that branch b starts from (raw copies: no initialisation)
-  alignas(64) unsigned char start[kBranches][sizeof(FrameT<Lanes>)];
-  for (int b = 0; b < kBranches; ++b) {
-    if (!wanted[b]) continue;
-    FrameT<Lanes> state;
-    int first = 0;
-    // (a branch's own start lies before every frame kept from it: a later branch sharing no
-    // more than that would have taken this branch's source; checked all the same)
-    if (source[b] >= 0 && (keep[b] >> shared[b]) << shared[b] == keep[b] &&
-        (keep[b] & (1u << shared[b])) == 0) {
-      std::memcpy(static_cast<void*>(&state), start[b], sizeof state);
-      first = shared[b];
-    } else {
-      state = broadcast<Lanes>(chain.joints[0].before);
-    }
-    for (int j = first; j < n; ++j) {
-      chain_step(chain, shape, motions[b], j, state);
-      if ((keep[b] >> (j + 1)) & 1u) {
-        for (int c = b + 1; c < kBranches; ++c) {
-          if (source[c] == b && shared[c] == j + 1) {
-            std::memcpy(start[c], static_cast<const void*>(&state), sizeof state);
-          }
-        }
+  // joint by joint, every branch's frame (independent work for the processor to overlap): a
+  // branch starts as a copy of its source's frame once that has `shared` joints (the source
+  // started before: see above)
+  alignas(64) unsigned char storage[kBranches][sizeof(FrameT<Lanes>)];
+  FrameT<Lanes>* state[kBranches] = {};
+  for (int j = 0; j <= n; ++j) {
+    for (int b = 0; b < kBranches; ++b) {
+      if (!wanted[b]) continue;
+      if (source[b] < 0 && j == 0) {
+        state[b] = new (storage[b]) FrameT<Lanes>(broadcast<Lanes>(chain.joints[0].before));
+      } else if (source[b] >= 0 && j == shared[b]) {
+        state[b] = new (storage[b]) FrameT<Lanes>(*state[source[b]]);
       }
     }
-    times_constant(state, chain.tail, shape.tail);
-    errors[b] = pose_error(state, target);
+    if (j == n) break;
+    for (int b = 0; b < kBranches; ++b) {
+      if (state[b] != nullptr) chain_step(chain, shape, motions[b], j, *state[b]);
+    }
+  }
+  for (int b = 0; b < kBranches; ++b) {
+    if (!wanted[b]) continue;
+    times_constant(*state[b], chain.tail, shape.tail);
+    errors[b] = pose_error(*state[b], target);
   }
 }
 

@@ -532,7 +532,7 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
     eigenproblem, back-substitution), the refinement kernel (Newton on the exact chain,
     verification, merging, the singular measure), and the Python around them (input checks,
     2pi copies, the result)."""
-    from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
+    from dhkin.ik.compiled.general6r import MAX_CANDIDATES, all_candidates
     from dhkin.ik.compiled.general6r_roots import settle
     from dhkin.ik.general6r import singular_band
 
@@ -541,10 +541,12 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
     n = min(len(poses.T), 2000)
     targets = [np.ascontiguousarray(solver._base_inverse @ T) for T in poses.T[:n]]
     T_dh = [np.ascontiguousarray(T @ solver._tool_inverse) for T in targets]
-    starts, info = np.empty((MAX_CANDIDATES, 6)), np.empty(2)
+    starts, origin, info = (np.empty((MAX_CANDIDATES, 6)), np.empty(MAX_CANDIDATES, np.int64),
+                            np.empty(2))
     roots, errors, sigmas = (np.empty((MAX_CANDIDATES, 6)), np.empty((MAX_CANDIDATES, 2)),
                              np.empty(MAX_CANDIDATES))
-    counts = [candidates(*solver._data, T, starts, info) for T in T_dh]
+    data = (*solver._data, solver.perturbations, solver.fallback, solver._dggev)
+    counts = [all_candidates(*data, T, starts, origin, info) for T in T_dh]
     band = singular_band(EXACT)
 
     def median_of(call: Callable[[int], object]) -> float:
@@ -559,11 +561,11 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
         return best
 
     def both(k: int) -> None:
-        count = candidates(*solver._data, T_dh[k], starts, info)
-        settle(solver.tip_chain, targets[k], starts, count, count, EXACT, solver.lever, band,
-               False, int(info[1]), roots, errors, sigmas)
+        count = all_candidates(*data, T_dh[k], starts, origin, info)
+        settle(solver.tip_chain, targets[k], starts, origin, count, solver.moves, EXACT,
+               solver.lever, band, roots, errors, sigmas)
 
-    eliminate = median_of(lambda k: candidates(*solver._data, T_dh[k], starts, info))
+    eliminate = median_of(lambda k: all_candidates(*data, T_dh[k], starts, origin, info))
     kernels = median_of(both)
     single = median_of(lambda k: robot.ik(poses.T[k], copies=False))
     return [("elimination kernel (eigenproblem included)", eliminate),

@@ -177,3 +177,32 @@ def returns_strings(T: NDArray[np.float64], robot: Robot) -> list[list[str]]:
 def returns_the_wrong_shape(T: NDArray[np.float64], robot: Robot) -> NDArray[np.float64]:
     """Returns the solutions transposed, (6, k)."""
     return robot.ik(T).q.T
+
+
+def general6r_one_root_per_eigenvalue(T: NDArray[np.float64], robot: Robot,
+                                      q_seed: NDArray[np.float64] | None = None
+                                      ) -> NDArray[np.float64]:
+    """The general 6R solver as it was before issue 26, for arms without a family: one root
+    per value of the eliminated joint (it took one null vector per eigenvalue, so of the roots
+    that share that value, at special angles four of the CRX-10iA's eight, it found one), and
+    the seed as a Newton start (seeded with the sampled q it returned q anyway). Reproduced
+    from today's complete answer: of the roots whose eliminated joint (the solver's
+    arrangement, model angle) agrees within 1e-3 rad, the first is kept; the seed's root, if
+    the seed lies within 1e-3 rad of one, is added back."""
+    solver = robot.general_solver
+    assert solver is not None, "an arm without a closed-form family"
+    roots = robot.ik(T).q
+    v = roots * solver.direction + solver.offset
+    if solver.arrangement.reversed:
+        v = -v[:, ::-1]
+    eliminated = v[:, solver.arrangement.k] + solver.model.phi[solver.arrangement.k]
+    kept: list[int] = []
+    for index, value in enumerate(eliminated):
+        if all(abs(np.angle(np.exp(1j * (value - eliminated[k])))) > 1e-3 for k in kept):
+            kept.append(index)
+    if q_seed is not None and len(roots):
+        distance = np.abs(np.angle(np.exp(1j * (roots - q_seed)))).max(axis=1)
+        nearest = int(np.argmin(distance))
+        if distance[nearest] <= 1e-3 and nearest not in kept:
+            kept.append(nearest)
+    return roots[sorted(kept)]

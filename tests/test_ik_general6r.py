@@ -133,7 +133,7 @@ def test_random_tables_counts_even_and_complete() -> None:
         Q = rng.uniform(-math.pi, math.pi, size=(40, 6))
         for q in Q:
             T_dh = solver.target_dh(table.fk(q))
-            roots, _, _ = solver.roots(T_dh, None, DEFAULT_TOLERANCE)
+            roots, _, _ = solver.roots(T_dh, DEFAULT_TOLERANCE)
             assert roots.shape[0] % 2 == 0 and roots.shape[0] <= 16
             assert np.min(np.max(np.abs(_wrap(roots - q)), axis=1)) < 1e-6
         recovered, worst, _ = run(Robot(table), Q[:20], seeded=False)
@@ -221,7 +221,7 @@ def test_robot_ik_uses_the_general_solver() -> None:
         with pytest.raises(InputError, match="q_seed"):
             robot.ik(robot.fk(q), [0.0] * 5)
     far = np.eye(4)
-    far[:3, 3] = [5.0, 0.0, 0.0]
+    far[:3, 3] = [1.0, 0.0, 0.0]  # within the links' length (1.149 m), beyond the arm's reach
     empty = dhkin.load("xarm6").ik(far)
     assert len(empty) == 0 and "no real solution" in empty.reason
 
@@ -308,3 +308,104 @@ def test_a_free_joint_follows_the_seed(name: str, start: list[float]) -> None:
         position, rotation = pose_errors(robot.reference().fk(result.q),
                                          np.repeat(T[None], len(result), axis=0))
         assert max(position.max(), rotation.max()) <= DEFAULT_TOLERANCE
+
+
+# --------------------------------------------------------------------------------------------
+# issue 26: every root at special angles, seed-independent; far poses answered before LAPACK
+
+#: Poses where the solver lost regular, isolated roots (reproducer d06 and issue 26): roots
+#: sharing the eliminated joint's value (four CRX-10iA roots at theta_2 = 90 deg), a matrix
+#: polynomial singular at the pose itself (tilted UR5), q5 = 0 of the tilted UR5.
+LOST_ROOT_POSES = [
+    ("fanuc_crx10ia", [0.0, 0.0, 0.0, -90.0, 90.0, 180.0]),
+    ("fanuc_crx10ia", [-90.0, -90.0, 0.0, 90.0, 90.0, -180.0]),
+    ("fanuc_crx10ia", [180.0, 90.0, 90.0, 90.0, -90.0, 90.0]),
+    ("xarm6", [-90.0, 90.0, 0.0, 0.0, 0.0, 0.0]),
+    ("ur5_tilted", [0.0, 90.0, 90.0, 90.0, 90.0, 0.0]),
+    ("ur5_tilted", [219.6, 221.7, 5.5, -154.2, 0.0, -84.0]),
+]
+
+
+@pytest.mark.parametrize(("name", "degrees"), LOST_ROOT_POSES)
+def test_every_isolated_root_at_special_angles(name: str, degrees: list[float]) -> None:
+    """Unseeded, the answer holds the sampled q and every isolated root a multistart on the
+    exact chain finds (verified and classified on Pinocchio: dhkin.validation.multistart);
+    seeded with q, the same regular roots (the seed chooses, it does not find)."""
+    from dhkin.validation.multistart import RootReference, missing_roots
+    from dhkin.validation.references import ReferenceSpec, TargetModel
+
+    robot = ur5_tilted() if name == "ur5_tilted" else dhkin.load(name)
+    solver = General6RSolver(robot.table)
+    q = np.radians(degrees)
+    model = TargetModel(ReferenceSpec(kind="exact"), robot.reference())
+    T = model.fk(q)
+    unseeded, seeded = solver.solve_one(T), solver.solve_one(T, q)
+    roots = RootReference(robot, model, starts=256).roots(T, DEFAULT_TOLERANCE)
+    assert len(roots) >= 2
+    assert not missing_roots(model, T, np.vstack([roots, q]), unseeded.q, DEFAULT_TOLERANCE,
+                             SAME)
+    regular = [np.asarray(r.q)[["singular" not in f for f in r.flags]] for r in (unseeded,
+                                                                              seeded)]
+    assert len(regular[0]) == len(regular[1])
+    d = np.abs(_wrap(regular[0][:, None] - regular[1][None])).max(axis=2)
+    assert np.all(d.min(axis=1) <= 1e-9)
+
+
+def test_shared_eigenvalues_are_split_into_each_root() -> None:
+    """The cause of the lost roots: at q = (0, 0, 0, -90, 90, 180) deg four of the CRX-10iA's
+    eight roots share the eliminated joint's value; the null space of M there is split into
+    one monomial vector per root, so that the elimination's starts are the roots themselves
+    (before any Newton step)."""
+    robot = dhkin.load("fanuc_crx10ia")
+    solver = robot.general_solver
+    assert solver is not None
+    q = np.radians([0.0, 0.0, 0.0, -90.0, 90.0, 180.0])
+    T_dh = solver.target_dh(robot.reference().fk(q))
+    starts = solver.compiled_candidates(T_dh)
+    roots = robot.ik(robot.reference().fk(q)).q
+    assert len(roots) == 8
+    d = np.abs(_wrap(roots[:, None] - starts[None])).max(axis=2)
+    assert d.min(axis=1).max() <= 1e-8
+
+
+@pytest.mark.parametrize("name", ["fanuc_crx10ia", "xarm6"])
+def test_far_poses_are_out_of_reach_before_the_elimination(name: str) -> None:
+    """Reproducer d04: a finite pose far out of reach (1e8 .. 1e300 m) is answered empty with
+    a true reason; one such row in a batch leaves the others' answers alone."""
+    robot = dhkin.load(name)
+    home = robot.fk(np.zeros(6))
+    for x in (1e8, 1e10, 1e12, 1e15, 1e100, 1e154, 1e300):
+        far = home.copy()
+        far[0, 3] = x
+        result = robot.ik(far)
+        assert len(result) == 0 and result.reason.startswith("out of reach")
+    batch = np.repeat(home[None], 3, axis=0)
+    batch[1, 0, 3] = 1e300
+    _, valid = robot.ik_batch(batch)
+    counts = valid.sum(axis=1)
+    assert counts[1] == 0 and counts[0] == counts[2] == len(robot.ik(home)) > 0
+
+
+def test_reach_at_its_edge() -> None:
+    """DH frame 6 within the links' length (plus the tolerance's widening) is within reach, a
+    hair beyond is not."""
+    from dhkin.ik.compiled.general6r import within_reach
+
+    solver = dhkin.load("xarm6").general_solver
+    assert solver is not None
+    reach = solver.reach(DEFAULT_TOLERANCE, solver.table.tool)
+    pose = np.eye(4)
+    for factor, inside in ((1.0 - 1e-12, True), (1.0 + 1e-12, False)):
+        pose[:3, 3] = np.array([0.6, 0.0, 0.8]) * reach * factor
+        assert within_reach(pose, reach) == inside
+
+
+def test_far_pose_on_the_command_line_is_one_line(capsys: pytest.CaptureFixture[str]) -> None:
+    """`dhkin ik fanuc_crx10ia --xyz 1e300 0 0 --rpy 0 0 0`: one line saying why, no
+    traceback (issue 26)."""
+    from tests.test_cli import run
+
+    code, out, err = run(capsys, "ik", "fanuc_crx10ia", "--xyz", "1e300", "0", "0", "--rpy",
+                         "0", "0", "0")
+    assert code == 1 and err == ""
+    assert out.count("\n") == 1 and "out of reach" in out

@@ -479,14 +479,18 @@ def test_joint_tolerance_follows_the_conditioning(abb: dhkin.Robot) -> None:
 
 
 def test_general_6r_arms_are_validated_completely() -> None:
-    """The FANUC CRX-10iA fits no family: dhkin's own IK is the general 6R solver, a complete
-    reference (missing samples and missing branches counted, seeded), and passes every check;
-    an IK that returns only the solution nearest the seed (as a numerical IK would) loses no
-    sample but lacks branches on most poses."""
+    """The FANUC CRX-10iA fits no family: dhkin's own IK is the general 6R solver, called
+    unseeded and checked against the independent multistart reference on the samples
+    reference_samples chooses (missing samples and missing branches counted), and passes every
+    check; an IK that returns only the solution nearest its seed (as a numerical IK would),
+    called unseeded too, loses the sampled q on most poses."""
+    from dhkin.validation.samples import reference_samples, sample_joint_vectors
+
     robot = dhkin.load("fanuc_crx10ia")
     assert robot.complete_ik and robot.ik_family == "general6r"
     report = validate(robot, n=60, seed=1, reference="exact")
-    assert report.complete_expected and report.branch_checked == report.samples
+    _, sets = sample_joint_vectors(robot, 60, 1)
+    assert report.complete_expected and report.branch_checked == reference_samples(sets).sum()
     assert report.ok and report.counts["success"] == report.samples, report.summary()
 
     def nearest_only(T: np.ndarray, q_seed: np.ndarray | None = None) -> np.ndarray:
@@ -495,5 +499,24 @@ def test_general_6r_arms_are_validated_completely() -> None:
         return solutions.q[[int(np.argmin(np.linalg.norm(solutions.q - reference, axis=1)))]]
 
     lacking = validate(robot, nearest_only, n=60, seed=1, reference="exact")
-    assert lacking.counts["missing"] == lacking.counts["wrong"] == 0
-    assert lacking.rate("missing_branch") > 0.5 and not lacking.ok
+    assert lacking.counts["wrong"] == 0
+    assert lacking.rate("missing") > 0.5 and not lacking.ok
+
+
+def test_validate_sees_the_roots_the_old_general_solver_lost() -> None:
+    """Arms without a closed form are checked unseeded against an independent multistart
+    reference (dhkin.validation.multistart): the general 6R solver as it was before issue 26
+    (one root per eigenvalue, the seed a Newton start: broken.general6r_one_root_per_eigenvalue)
+    is caught as missing at special angles; today's solver passes."""
+    robot = dhkin.load("fanuc_crx10ia")
+    report = validate(robot, broken.general6r_one_root_per_eigenvalue, n=100, seed=2,
+                      reference="exact")
+    assert report.branch_checked > 0 and not report.ok
+    assert report.counts["missing_branch"] > 0 and report.counts["missing"] > 0
+    lost = [f for f in report.failures if f.outcome == "missing_branch"]
+    assert any(f.sample_set == "special" for f in lost)
+    assert all(b.startswith("root q=(") for f in lost for b in f.missing_branches)
+    own = validate(robot, n=100, seed=2, reference="exact")
+    assert own.branch_checked >= report.branch_checked  # the broken IK fails some earlier
+    assert own.ok and own.counts["missing_branch"] == 0 and own.counts["missing"] == 0
+

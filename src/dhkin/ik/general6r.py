@@ -35,21 +35,23 @@ from dhkin.dh import DHTable
 from dhkin.errors import FamilyError, InputError
 from dhkin.ik.general6r_answer import copies as copies_within
 from dhkin.ik.general6r_answer import (
+    distinct_rows,
     onto_limits,
+    pack,
     seed_members,
     singular_band,
 )
 from dhkin.ik.general6r_arrangement import (
     IMAGINARY_BAND,
     Arrangement,
-    candidates,
     choose_arrangement,
     frames_at_zero,
 )
 from dhkin.ik.general6r_elimination import Elimination
 from dhkin.ik.general6r_model import Model, _inverse, refit
+from dhkin.ik.general6r_moves import fallback_starts, moves, perturbations
 from dhkin.ik.inputs import TWO_PI, as_targets, check_tolerance, pose_error_message
-from dhkin.ik.result import FLAG_NAMES, Configuration, IKBatch, IKSolutions
+from dhkin.ik.result import Configuration, IKBatch, IKSolutions
 from dhkin.tolerances import DEFAULT_TOLERANCE
 
 #: The free angles eliminated first: theta_k = shift + 2 atan(x3). An angle with no special
@@ -85,11 +87,22 @@ class General6RSolver:
         self.tip_chain = self.chain.copy()
         self.tip_chain[6, :12] = (pre[6] @ table.tool)[:3].ravel()
         self.tip_lever = self.lever + float(np.linalg.norm(table.tool[:3, 3]))
+        #: The sum of the chain's link lengths (m): DH frame 6 never lies farther than this
+        #: from DH frame 0 (a farther pose is out of reach before any elimination).
+        self.links = float(sum(np.linalg.norm(self.chain[j, [3, 7, 11]]) for j in range(7)))
         if arrangement is None:
             arrangement = choose_arrangement(self)
         self.arrangement = arrangement
         self.model, self.elimination = self._eliminator(arrangement)
         self._data = self.kernel_data()
+        #: The moved poses of an ill-conditioned pose (:mod:`dhkin.ik.general6r_moves`): the
+        #: motions (1, 6) and their matrices (1, 4, 4).
+        self.moves = moves(self.model.scale)
+        self.perturbations = perturbations(self.model.scale)
+        self.fallback = fallback_starts(table.lower, table.upper)
+        from dhkin.ik.compiled.general6r_qz import DGGEV
+
+        self._dggev = DGGEV
         self._configurations: dict[tuple[int, ...], Configuration] = {}
         self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
         self._zero_seed = np.zeros(6)
@@ -117,11 +130,15 @@ class General6RSolver:
     def compiled_candidates(self, T_dh: NDArray[np.float64],
                             data: tuple[NDArray[np.float64], ...] | None = None
                             ) -> NDArray[np.float64]:
-        """:meth:`candidates`, compiled (the same values)."""
-        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, candidates
+        """The starts of one elimination (:func:`dhkin.ik.compiled.general6r.candidates`) of
+        the target T_dh (DH frame 0 -> DH frame 6 of the exact chain), before refinement:
+        joint values (m, 6)."""
+        from dhkin.ik.compiled.general6r import MAX_PER_POSE, candidates
+        from dhkin.ik.compiled.general6r_qz import DGGEV
 
-        out = np.empty((MAX_CANDIDATES, 6))
-        count = candidates(*(data or self._data), np.ascontiguousarray(T_dh), out, np.empty(2))
+        out = np.empty((MAX_PER_POSE, 6))
+        count = candidates(*(data or self._data), DGGEV, True, np.ascontiguousarray(T_dh), out,
+                           np.empty(MAX_PER_POSE, np.int64), np.empty(2))
         return out[:count]
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:
@@ -130,15 +147,6 @@ class General6RSolver:
             pre = np.stack([_inverse(pre[6 - i]) for i in range(7)])
         model = refit(pre)
         return model, Elimination(model, arrangement.k, SHIFT)
-
-    # -- candidates -----------------------------------------------------------------------
-
-    def candidates(self, T_dh: NDArray[np.float64], arrangement: Arrangement | None = None,
-                   elimination: Elimination | None = None) -> NDArray[np.float64]:
-        """Joint values (m, 6) of every near-real eigenvalue for the target T_dh (DH frame 0 ->
-        DH frame 6 of the exact chain), before refinement: numpy's reference of the compiled
-        candidates (:func:`dhkin.ik.general6r_arrangement.candidates`)."""
-        return candidates(self, T_dh, arrangement, elimination)
 
     # -- solutions ------------------------------------------------------------------------
 
@@ -211,54 +219,45 @@ class General6RSolver:
 
         return max(tolerance - FK_ROUNDING * lever, 0.5 * tolerance)
 
-    def roots(self, T_dh: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
-              tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+    def roots(self, T_dh: NDArray[np.float64], tolerance: float
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
         """The verified, distinct solutions (k, 6) wrapped to (-pi, pi] for the target T_dh (DH
         frame 0 -> DH frame 6), their residuals there (k, 2), and how many candidates did not
-        verify."""
-        return self._roots(T_dh, T_dh, self.chain, q_seed, tolerance)
-
-    def _roots(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
-               chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
-               tolerance: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
-        """:meth:`roots`, refined and verified on ``chain`` against ``tip_target`` (DH frame
-        0 -> the chain's last frame)."""
-        roots, errors, failed, _ = self._settled(T_dh, tip_target, chain, q_seed, tolerance,
-                                                 self.lever)
+        verify. No seed: the roots do not depend on one."""
+        roots, errors, failed, _ = self._settled(T_dh, T_dh, self.chain, tolerance, self.lever)
         return roots, errors, failed
 
     def _settled(self, T_dh: NDArray[np.float64], tip_target: NDArray[np.float64],
-                 chain: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
-                 tolerance: float, lever: float
+                 chain: NDArray[np.float64], tolerance: float, lever: float
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, NDArray[np.bool_]]:
-        """:meth:`_roots` and whether each root is singular (:func:`singular_band`, or the
-        pose's eigenproblem ill-conditioned: no leading matrix reached LEAD_CONDITION)."""
-        from dhkin.ik.compiled.general6r import (
-            LEAD_CONDITION,
-            MAX_CANDIDATES,
-            candidates,
-            settle,
-        )
+        """The roots of T_dh refined and verified on ``chain`` against ``tip_target`` (DH frame
+        0 -> the chain's last frame), their residuals, the candidates that did not verify, and
+        whether each root is singular (:func:`singular_band`)."""
+        from dhkin.ik.compiled.general6r import MAX_CANDIDATES, all_candidates, settle
+        from dhkin.ik.compiled.general6r_qz import DGGEV
 
         starts = np.empty((MAX_CANDIDATES, 6))
+        origin = np.empty(MAX_CANDIDATES, np.int64)
         info = np.empty(2)
-        count = candidates(*self._data, np.ascontiguousarray(T_dh), starts, info)
-        seeded = count
-        if q_seed is not None:
-            starts[count] = q_seed
-            count += 1
-        roots = np.empty((MAX_CANDIDATES, 6))
-        errors = np.empty((MAX_CANDIDATES, 2))
-        sigmas = np.empty(MAX_CANDIDATES)
+        count = all_candidates(*self._data, self.perturbations, self.fallback, DGGEV,
+                               np.ascontiguousarray(T_dh), starts, origin, info)
+        roots = np.empty((count, 6))
+        errors = np.empty((count, 2))
+        sigmas = np.empty(count)
         band = singular_band(tolerance)
-        ill_conditioned = not info[0] >= LEAD_CONDITION
-        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, count, seeded,
-                               tolerance, lever, band, ill_conditioned, int(info[1]), roots,
-                               errors, sigmas)
-        singular = sigmas[:found] <= band
-        if ill_conditioned:
-            singular[:] = True
-        return roots[:found], errors[:found], failed, singular
+        found, failed = settle(chain, np.ascontiguousarray(tip_target), starts, origin, count,
+                               self.moves, tolerance, lever, band, roots, errors, sigmas)
+        return roots[:found], errors[:found], failed, sigmas[:found] <= band
+
+    def reach(self, tolerance: float, tool: NDArray[np.float64]) -> float:
+        """How far DH frame 6 may lie from DH frame 0 (m) for a pose of the point verified
+        (``tool``: DH frame 6 -> that point) within ``tolerance``: the chain's links, widened
+        by the tolerance at the point and its rotation over the tool's length, and FK
+        rounding."""
+        from dhkin.ik.core import FK_ROUNDING
+
+        return (self.links + tolerance * (1.0 + float(np.linalg.norm(tool[:3, 3])))
+                + FK_ROUNDING * self.tip_lever)
 
     def solve_one(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                   tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
@@ -294,20 +293,30 @@ class General6RSolver:
         constants = self._fast_constants.get(tolerance)
         if constants is None:
             verify = self.verification_tolerance(tolerance, self.tip_lever)
-            constants = (verify, self.tip_lever, singular_band(verify), self.table.lower,
-                         self.table.upper, tolerance / self.tip_lever)
+            constants = (self.reach(tolerance, self.table.tool), verify, self.tip_lever,
+                         singular_band(verify), self.table.lower, self.table.upper,
+                         tolerance / self.tip_lever)
             self._fast_constants[tolerance] = constants
         try:
             buffers = self._buffers.arrays
         except AttributeError:
             buffers = self._fast_buffers()
-        count = self._fast_kernel(*self._data, self._base_inverse, self._tool_inverse,
+        count = self._fast_kernel(*self._data, self.perturbations, self.moves, self.fallback,
+                                  self._dggev, self._base_inverse, self._tool_inverse,
                                   self.tip_chain, target, seed, *constants, *buffers)
+        from dhkin.ik.compiled.general6r import FAILED, FOUND, PROJECTION, SETTLED
+
+        out_q, out_errors, info = buffers[5], buffers[6], buffers[8]
+        if count == SETTLED:  # the roots are in the buffers: the Python path finishes
+            found = int(info[FOUND])
+            band = constants[3]
+            projected, projection = self._pose(target, "T")
+            return self._answer(projected, projection, None if q_seed is None else seed,
+                                tolerance, self._tip(None), False, buffers[2][:found].copy(),
+                                buffers[3][:found].copy(), int(info[FAILED]),
+                                buffers[4][:found] <= band)
         if count < 0:
             return None
-        from dhkin.ik.compiled.general6r import FAILED, PROJECTION
-
-        out_q, out_errors, info = buffers[4], buffers[5], buffers[7]
         q = out_q[:count].copy()
         turns = np.rint(q * (1.0 / TWO_PI)).astype(np.int64).tolist()
         return IKSolutions(q=q, configurations=tuple(map(self._configuration,
@@ -318,12 +327,13 @@ class General6RSolver:
 
     def _fast_buffers(self) -> tuple[NDArray[Any], ...]:
         """Per-thread work arrays of :func:`dhkin.ik.compiled.general6r.solve_pose`: starts,
-        roots, errors, sigmas, out_q, out_errors, kept, info."""
+        origin, roots, errors, sigmas, out_q, out_errors, kept, info."""
         from dhkin.ik.compiled.general6r import MAX_CANDIDATES
 
         n = MAX_CANDIDATES
-        arrays = (np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 2)), np.empty(n),
-                  np.empty((n, 6)), np.empty((n, 2)), np.empty(n, np.int64), np.empty(2))
+        arrays = (np.empty((n, 6)), np.empty(n, np.int64), np.empty((n, 6)), np.empty((n, 2)),
+                  np.empty(n), np.empty((n, 6)), np.empty((n, 2)), np.empty(n, np.int64),
+                  np.empty(3))
         self._buffers.arrays = arrays
         return arrays
 
@@ -332,10 +342,12 @@ class General6RSolver:
         """:func:`dhkin.ik.compiled.general6r.solve_pose`'s compiled entry point for this
         solver's argument types (numba's per-call type resolution skipped)."""
         from dhkin.ik.compiled.general6r import solve_pose
+        from dhkin.ik.compiled.general6r_qz import DGGEV
         from dhkin.ik.compiled.jit import entry_point
 
-        args = (*self._data, self._base_inverse, self._tool_inverse, self.tip_chain,
-                np.eye(4), self._zero_seed, DEFAULT_TOLERANCE, 1.0, 1.0, self.table.lower,
+        args = (*self._data, self.perturbations, self.moves, self.fallback, DGGEV,
+                self._base_inverse, self._tool_inverse, self.tip_chain, np.eye(4),
+                self._zero_seed, 1.0, DEFAULT_TOLERANCE, 1.0, 1.0, self.table.lower,
                 self.table.upper, 1.0, *self._fast_buffers())
         kernel: Callable[..., int] = entry_point(solve_pose, args)
         return kernel
@@ -344,17 +356,43 @@ class General6RSolver:
                seed: NDArray[np.float64] | None, tolerance: float,
                tip: tuple[NDArray[np.float64], NDArray[np.float64], float],
                copies: bool) -> IKSolutions:
-        """:meth:`solve_one` of a checked, projected pose."""
+        """:meth:`solve_one` of a checked, projected pose. The roots do not depend on the seed:
+        it only chooses each root's 2pi copy and, on a curve of solutions (a singular root),
+        the member nearest it."""
+        from dhkin.ik.compiled.general6r import within_reach
+
         chain, tool_inverse, lever = tip
         tip_target = self._base_inverse @ target
         T_dh = tip_target @ tool_inverse
+        reach = self.reach(tolerance, _inverse(tool_inverse))
+        if not within_reach(T_dh, reach):
+            largest = float(np.abs(T_dh[:3, 3]).max())
+            distance = largest * float(np.linalg.norm(T_dh[:3, 3] / largest))
+            return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
+                               reason=f"out of reach: DH frame 6 lies {distance:.6g} m from "
+                                      f"DH frame 0, farther than the chain's links reach "
+                                      f"({self.links:.6g} m)")
+        verify = self.verification_tolerance(tolerance, lever)
+        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, verify, lever)
+        return self._answer(target, projection, seed, tolerance, tip, copies, roots, errors,
+                            failed, singular)
+
+    def _answer(self, target: NDArray[np.float64], projection: float,
+                seed: NDArray[np.float64] | None, tolerance: float,
+                tip: tuple[NDArray[np.float64], NDArray[np.float64], float], copies: bool,
+                roots: NDArray[np.float64], errors: NDArray[np.float64], failed: int,
+                singular: NDArray[np.bool_]) -> IKSolutions:
+        """:meth:`solve_one` of a checked, projected pose from its settled roots: the seed's
+        member of each singular root, the 2pi copies, the result."""
+        chain, _, lever = tip
+        tip_target = self._base_inverse @ target
         verify = self.verification_tolerance(tolerance, lever)
         if seed is None:  # as in the families: without a seed, free joints are chosen near 0
             seed = np.zeros(6)
-        roots, errors, failed, singular = self._settled(T_dh, tip_target, chain, seed, verify,
-                                                        lever)
         if np.any(singular):
-            seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever)
+            keep = seed_members(roots, errors, singular, seed, chain, tip_target, verify, lever,
+                                (self.table.lower, self.table.upper, tolerance / lever))
+            roots, errors, singular = roots[keep], errors[keep], singular[keep]
         if roots.shape[0] == 0:
             reason = ("no real solution: the elimination found no root that verifies on the "
                       f"exact chain at tolerance {tolerance:g}")
@@ -375,7 +413,7 @@ class General6RSolver:
             out_flags = [f for b, _, f in blocks for _ in range(b.shape[0])]
             q_out, residuals, out_flags = onto_limits(
                 lower, upper, q_out, residuals, out_flags, chain, tip_target,
-                self.verification_tolerance(tolerance, lever))
+                self.verification_tolerance(tolerance, lever), lever)
         else:
             from dhkin.ik.compiled.general6r import nearest_copies
 
@@ -384,10 +422,15 @@ class General6RSolver:
             kept = np.empty(found, np.int64)
             count = nearest_copies(chain, tip_target, roots, errors, found, reference,
                                    self.table.lower, self.table.upper, slack,
-                                   self.verification_tolerance(tolerance, lever), q_out,
-                                   residuals, kept)
+                                   verify, lever, np.ascontiguousarray(singular),
+                                   singular_band(verify), q_out, residuals, kept)
             q_out, residuals = q_out[:count], residuals[:count]
             out_flags = [flags[k] for k in kept[:count].tolist()]
+            if any(out_flags):  # singular members set onto a limit may meet: one root
+                distinct = distinct_rows(q_out, [bool(f) for f in out_flags], chain,
+                                         tip_target, verify)
+                q_out, residuals = q_out[distinct], residuals[distinct]
+                out_flags = [out_flags[k] for k in np.flatnonzero(distinct)]
         if q_out.shape[0] == 0:
             return IKSolutions(q=np.zeros((0, 6)), family=self.family, projection=projection,
                                dropped=failed,
@@ -436,26 +479,7 @@ class General6RSolver:
                 target, projection = self._pose(targets[index], f"T[{index}]")
                 result = self._solve(target, projection, seeds[index], tolerance, tip, copies)
             results.append(result)
-        width = max([len(r) for r in results], default=0)
-        q = np.zeros((n_poses, width, 6))
-        valid = np.zeros((n_poses, width), np.bool_)
-        flags = np.zeros((n_poses, width), np.uint8)
-        branch = np.full((n_poses, width), -1, np.int16)
-        residuals = np.zeros((n_poses, width, 2))
-        bits = {name: bit for bit, name in FLAG_NAMES.items()}
-        for index, result in enumerate(results):
-            count = len(result)
-            q[index, :count] = result.q
-            valid[index, :count] = True
-            branch[index, :count] = 0
-            residuals[index, :count] = result.residuals
-            for slot, names in enumerate(result.flags):
-                flags[index, slot] = sum(bits[name] for name in names)
-        return IKBatch(q=q, valid=valid, flags=flags, branch=branch,
-                       branch_labels=self.branch_labels, family=self.family,
-                       residuals=residuals,
-                       projection=np.array([r.projection for r in results]),
-                       dropped=np.array([r.dropped for r in results], np.int64))
+        return pack(results, self.branch_labels, self.family)
 
     def _configuration(self, turns: tuple[int, ...]) -> Configuration:
         found = self._configurations.get(turns)

@@ -73,8 +73,9 @@ def own_ik(robot: Arm) -> IKCallable:
     """dhkin's own IK of ``robot`` as a validation callable.
 
     The closed-form IK and the general 6R solver take the sampled q as seed (they only use it
-    at a singularity: for free joints, and the general solver as a Newton start where a root
-    is singular). The numerical IK gets no seed: starting at the answer would prove nothing.
+    at a singularity, to choose a free joint; the general solver's roots are checked unseeded
+    against an independent reference too, :mod:`dhkin.validation.multistart`). The numerical
+    IK gets no seed: starting at the answer would prove nothing.
     """
     if not robot.complete_ik:
         def numerical(T: NDArray[np.float64]) -> NDArray:

@@ -178,10 +178,10 @@ def wanted(ik: Any) -> frozenset[str]:
     return frozenset(("q_seed", "robot")) & frozenset(parameters(ik))
 
 
-def _arguments(robot: Arm, T: NDArray[np.float64], q_seed: NDArray[np.float64],
+def _arguments(robot: Arm, T: NDArray[np.float64], q_seed: NDArray[np.float64] | None,
                declared: frozenset[str]) -> tuple[NDArray[np.float64], dict[str, Any]]:
     kwargs: dict[str, Any] = {}
-    if "q_seed" in declared:
+    if "q_seed" in declared and q_seed is not None:  # None: unseeded (the IK's own default)
         kwargs["q_seed"] = read_only_copy(q_seed)
     if "robot" in declared:
         kwargs["robot"] = robot
@@ -195,8 +195,9 @@ def _describe(exc: BaseException) -> str:
     return f"raised {type(exc).__name__}" + (f": {text}" if text else "")
 
 
-def _run_guarded(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray[np.float64],
-                 limit: int, declared: frozenset[str]) -> CallResult:
+def _run_guarded(ik: Any, robot: Arm, T: NDArray[np.float64],
+                 q_seed: NDArray[np.float64] | None, limit: int,
+                 declared: frozenset[str]) -> CallResult:
     """Call and read the IK; every exception but KeyboardInterrupt and the timer's becomes the
     pose's problem."""
     try:
@@ -222,8 +223,9 @@ def _timed_out(timeout: float) -> CallResult:
                           "--timeout)", "no_solution")
 
 
-def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64], q_seed: NDArray[np.float64],
-                    timeout: float | None, limit: int = MAX_SOLUTIONS_PER_CALL,
+def call_in_process(ik: Any, robot: Arm, T: NDArray[np.float64],
+                    q_seed: NDArray[np.float64] | None, timeout: float | None,
+                    limit: int = MAX_SOLUTIONS_PER_CALL,
                     declared: frozenset[str] | None = None) -> CallResult:
     """One guarded call in this process (see the module docstring); ``declared``: the IK's
     :func:`wanted` keywords, if already known."""
@@ -326,13 +328,15 @@ class IsolatedCaller:
         self._connection.close()
         self._process = self._connection = None
 
-    def __call__(self, T: NDArray[np.float64], q_seed: NDArray[np.float64]) -> CallResult:
+    def __call__(self, T: NDArray[np.float64], q_seed: NDArray[np.float64] | None
+                 ) -> CallResult:
         if self._process is None:
             problem = self._start()
             if problem:
                 return CallResult([], problem, "no_solution")
         try:
-            self._connection.send((np.array(T, dtype=float), np.array(q_seed, dtype=float)))
+            self._connection.send((np.array(T, dtype=float),
+                                   None if q_seed is None else np.array(q_seed, dtype=float)))
             if self._timeout is not None and not self._connection.poll(self._timeout):
                 self._stop()
                 return _timed_out(self._timeout)
@@ -365,7 +369,8 @@ def _exit_text(code: int | None) -> str:
 
 class IKCaller:
     """The IK under test, called guarded: ``caller(T, q_seed) -> CallResult``, in this process
-    or (``isolate``) in a child process. Use as a context manager (the child is ended on exit)."""
+    or (``isolate``) in a child process; ``q_seed`` None calls it unseeded (an IK that takes a
+    seed gets none). Use as a context manager (the child is ended on exit)."""
 
     def __init__(self, ik: Any, robot: Arm, timeout: float | None = DEFAULT_CALL_TIMEOUT,
                  isolate: bool = False, limit: int = MAX_SOLUTIONS_PER_CALL) -> None:
@@ -373,9 +378,9 @@ class IKCaller:
         self._declared = wanted(ik)
         self._isolated = IsolatedCaller(ik, robot, timeout, limit) if isolate else None
 
-    def __call__(self, T: ArrayLike, q_seed: ArrayLike) -> CallResult:
+    def __call__(self, T: ArrayLike, q_seed: ArrayLike | None) -> CallResult:
         target = np.asarray(T, dtype=float)
-        seed = np.asarray(q_seed, dtype=float)
+        seed = None if q_seed is None else np.asarray(q_seed, dtype=float)
         if self._isolated is not None:
             return self._isolated(target, seed)
         return call_in_process(self.ik, self.robot, target, seed, self.timeout, self.limit,

@@ -93,7 +93,10 @@ def residuals(model: TargetModel, T: NDArray[np.float64], rows: NDArray[np.float
 def configuration_labels(robot: Arm, targets: NDArray[np.float64],
                          q: NDArray[np.float64]) -> list[str]:
     """Configuration of each sampled q according to dhkin's closed-form solver: the label of its
-    nearest valid branch ('' without a closed form, 'unlabelled' without a valid branch)."""
+    nearest valid branch ('' without a closed form, 'unlabelled' without a valid branch). The
+    general 6R solver's roots have no labels: it is not called for them."""
+    if robot.ik_family == "general6r":
+        return [""] * q.shape[0]
     try:
         batch = robot.ik_batch_detailed(targets)
     except FamilyError:

@@ -43,16 +43,24 @@ Outcome per sample (one each, the first that applies, in this order):
   sigma_min(J), so the joint tolerance there is
   ``joint_tolerance + max(POSE_ROUNDING, reference deviation, residual) / sigma_min``
   (sigma_min from Pinocchio's Jacobian at the sampled q; residual: the returned solutions'
-  largest error on the reference);
+  largest error on the reference); on a six-revolute arm a returned solution that is one root
+  with q (the segment between them solves the pose at the tolerance) matches it too;
 * ``missing_branch``: a branch of the complete solution set is not among the solutions, on
-  any pose, whether or not the sampled q lies on it. The branches of a pose are dhkin's own
-  complete answer ``robot.ik(T, q_seed=q, copies=False)``: the closed-form family's (one
-  solution per branch), or for six-revolute arms without a family the general 6R solver's
-  (every root; dhkin.ik.general6r); those that verify on the reference. Each must be matched
-  by a returned solution like the sampled q is above (mod 2pi, same widening at the branch's
-  own sigma_min; on the wrist singularity, where a branch is a family, joints 1 and 5 only).
-  Checked for robots with a complete IK (``robot.complete_ik``) and IKs that promise every
-  solution (``complete_expected``);
+  any pose, whether or not the sampled q lies on it. For an arm with a closed-form family the
+  branches of a pose are dhkin's own answer ``robot.ik(T, q_seed=q, copies=False)`` (one
+  solution per branch), those that verify on the reference; each must be matched by a
+  returned solution like the sampled q is above (mod 2pi, same widening at the branch's own
+  sigma_min; on the wrist singularity, where a branch is a family, joints 1 and 5 only). For
+  a six-revolute arm without one (``robot.ik_family == "general6r"``) the reference is
+  independent of dhkin's IK: every isolated root (sigma_min >= 1e-6) of a multistart of Newton
+  from fixed starts, verified on the reference (:mod:`dhkin.validation.multistart`), on every
+  other special-angle sample, every 10th near-singular and every 100th uniform one
+  (:func:`~dhkin.validation.samples.reference_samples`); each must be within the joint
+  tolerance of a solution of the IK called without a seed, or one root with it (the segment
+  between them solves the pose). Such IKs are called unseeded for every sample (a seed may
+  choose a free joint, in the continuity call below; it must not find roots). Checked for
+  robots with a complete IK (``robot.complete_ik``) and IKs that promise every solution
+  (``complete_expected``);
 * ``discontinuous``: on the singular sets (:data:`CONTINUITY_SETS`), an IK that takes ``q_seed``
   is called a second time with the seed perturbed by :data:`SEED_PERTURBATION` rad (each
   revolute joint +- at random, fixed seed, clipped to the limits); the returned solution nearest
@@ -85,6 +93,7 @@ from dhkin.validation.adapters import IKCallable, own_ik
 from dhkin.validation.batched import check_all_batched
 from dhkin.validation.calls import DEFAULT_CALL_TIMEOUT, IKCaller, takes_seed
 from dhkin.validation.matching import configuration_labels
+from dhkin.validation.multistart import RootReference, check_reference, needs_reference
 from dhkin.validation.references import ReferenceSpec, TargetModel, target_model
 from dhkin.validation.report import ValidationReport
 from dhkin.validation.sample_checks import (
@@ -93,7 +102,7 @@ from dhkin.validation.sample_checks import (
     missing_branches,
     resolvable,
 )
-from dhkin.validation.samples import perturbed_seeds, sample_joint_vectors
+from dhkin.validation.samples import perturbed_seeds, reference_samples, sample_joint_vectors
 from dhkin.validation.tally import Tally
 
 
@@ -176,7 +185,8 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
     q, sets = sample_joint_vectors(robot, n, settings.seed)
     return run_samples(robot, model, callable_ik, q, sets,
                        perturbed_seeds(robot, q, sets, settings.seed), settings,
-                       batched=ik is None and robot.complete_ik and not settings.isolate)
+                       batched=(ik is None and robot.complete_ik and not settings.isolate
+                                and not needs_reference(robot)))
 
 
 def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
@@ -219,11 +229,17 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
     tolerance, joint_tolerance = settings.tolerance, settings.joint_tolerance
     tally = Tally()
     seeded = takes_seed(caller.ik)
-    check_branches = settings.complete_expected and robot.complete_ik
+    reference = (RootReference(robot, model)
+                 if settings.complete_expected and needs_reference(robot) else None)
+    check_branches = settings.complete_expected and robot.complete_ik and reference is None
+    referenced = reference_samples(sets)
+    # an IK complete without a seed (the general 6R solver's arms) is run unseeded: a seed may
+    # choose a free joint (the continuity call below), it must not find roots
+    unseeded = reference is not None
     for k in _progress(range(len(sets)), len(sets), f"validate {robot.name}", settings.progress):
-        call = caller(targets[k], q[k])
+        call = caller(targets[k], None if unseeded else q[k])
         checked, Q = check_sample(robot, model, q[k], targets[k], call, tolerance,
-                                   joint_tolerance, seeded)
+                                   joint_tolerance, seeded and not unseeded)
         outcome, detail = checked.outcome, checked.detail
         tally.residuals(checked.position, checked.rotation)
         missing: list[str] = []
@@ -237,6 +253,10 @@ def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.f
                 detail = f"{len(lacking)} branch(es) not returned: " + "; ".join(
                     f"{name} (closest solution differs by {closest:.2e})"
                     for name, closest in lacking)
+        if outcome == "success" and reference is not None and referenced[k]:
+            report.branch_checked += 1
+            outcome, detail, missing = check_reference(model, reference, targets[k], Q,
+                                                       tolerance, joint_tolerance)
         returned_perturbed: list[NDArray[np.float64]] = []
         if outcome == "success" and seeded and np.all(np.isfinite(perturbed[k])):
             report.continuity_checked += 1

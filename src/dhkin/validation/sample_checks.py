@@ -23,6 +23,7 @@ from dhkin.validation.matching import (
     wrap,
     wrist_singular,
 )
+from dhkin.validation.multistart import missing_roots
 from dhkin.validation.references import TargetModel
 from dhkin.validation.samples import CONTINUITY_DISTANCE, SEED_PERTURBATION
 from dhkin.validation.tally import Tally
@@ -115,6 +116,10 @@ def check_sample(robot: Arm, model: TargetModel, q_sampled: NDArray[np.float64],
     found, closest = matched(robot, model, Q, q_sampled,
                               compared_joints(robot, q_sampled, seeded), joint_tolerance,
                               residual)
+    if not found and robot.dof == 6 and all(j.is_revolute for j in robot.table.joints):
+        # one root with a returned solution at the tolerance: the segment between them solves
+        # the pose too (near a singularity the pose cannot tell them apart)
+        found = not missing_roots(model, T, q_sampled[None], Q, tolerance, joint_tolerance)
     if not found:
         return Checked("missing", f"closest returned solution differs by {closest:.2e} "
                                    "(mod 2pi)", position, rotation), Q

@@ -34,6 +34,26 @@ CONTINUITY_DISTANCE = 0.25
 CONTINUITY_SETS: tuple[str, ...] = ("special", "near_singular")
 
 
+#: Which samples the multistart reference of an arm without a closed form checks
+#: (:mod:`dhkin.validation.multistart`, ~5 ms per pose): every other special-angle sample
+#: (roots were lost there: several share a joint value), every REFERENCE_EVERY-th
+#: near-singular one and every REFERENCE_EVERY^2-th uniform one (a run of 10,000 uniform
+#: poses: 500 + 100 + 100); every sample is checked against its sampled q.
+REFERENCE_EVERY = 10
+
+
+def reference_samples(sets: list[str]) -> NDArray[np.bool_]:
+    """Which samples the multistart reference checks (see :data:`REFERENCE_EVERY`)."""
+    every = {"special": 2, "near_singular": REFERENCE_EVERY, "uniform": REFERENCE_EVERY ** 2}
+    seen: dict[str, int] = {}
+    chosen = []
+    for name in sets:
+        index = seen.get(name, 0)
+        seen[name] = index + 1
+        chosen.append(index % every.get(name, 1) == 0)
+    return np.array(chosen, dtype=np.bool_)
+
+
 def sample_joint_vectors(robot: Arm, n: int, seed: int) -> tuple[NDArray[np.float64],
                                                                     list[str]]:
     """n uniform + n/10 special-angle + n/10 near-singular joint vectors (at least 1 each)."""

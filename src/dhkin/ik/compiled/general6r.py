@@ -6,7 +6,9 @@ The eigenproblem is LAPACK's dgeev (through numba's own binding to scipy's LAPAC
 companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24). Its leading matrix A = M at
 theta_k = shift + pi must be invertible: of the four angles shift + {0, 1, 2, 3} pi/2 the one
 whose matrix is best conditioned becomes theta_k = that + pi (x3 -> infinity), so that no root
-lies at infinity unless all four are roots.
+lies at infinity unless all four are roots. Eigenvalues shared by several roots are split
+into one start per root (:mod:`dhkin.ik.compiled.general6r_null`); where no leading matrix is
+well conditioned, the pose is solved slightly moved, twice (:func:`all_candidates`).
 """
 
 from __future__ import annotations
@@ -18,16 +20,15 @@ from numba import types
 from numba.np.linalg import _LAPACK, ensure_lapack
 from numpy.typing import NDArray
 
-from dhkin.ik.compiled.general6r_roots import nearest_copies, settle
+from dhkin.ik.compiled.general6r_back import back_substitute, rigid_inverse
+from dhkin.ik.compiled.general6r_null import MAX_SPLIT, null_space, null_vector, split
+from dhkin.ik.compiled.general6r_qz import pencil_eigenvalues
+from dhkin.ik.compiled.general6r_roots import MOVED, PAIRED, SHARED, nearest_copies, settle
 from dhkin.ik.compiled.jit import jit
 from dhkin.ik.compiled.pose import project, status
 
 ensure_lapack()
 _rgeev = _LAPACK().numba_ez_rgeev(types.float64)
-
-#: Most candidates one pose can give: 24 eigenvalues and the seed.
-MAX_CANDIDATES = 25
-
 
 #: Layout of the ``setup`` vector: shift, k, reversed, scale, imaginary band.
 SHIFT, K, REVERSED, SCALE, BAND = 0, 1, 2, 3, 4
@@ -38,24 +39,28 @@ SHIFT, K, REVERSED, SCALE, BAND = 0, 1, 2, 3, 4
 LEAD_CONDITION = 1e-8
 
 
-@jit
-def _dh(theta: float, d: float, a: float, alpha: float, out: NDArray[np.float64]) -> None:
-    ct, st = math.cos(theta), math.sin(theta)
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = ct, -st * ca, st * sa, a * ct
-    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = st, ct * ca, -ct * sa, a * st
-    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = 0.0, sa, ca, d
-    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
+#: Eigenvalues of the eliminated joint whose angles (rad, real parts) lie closer than this
+#: are one cluster, split at each member into as many starts as the cluster has members
+#: (:func:`candidates`). Taking two eigenvalues together costs starts, never roots (each
+#: member's own null vector is in its split: the exact eigenvector of the shift operators);
+#: taking apart the copies of an eigenvalue shared by two roots loses one. Rounding spreads
+#: such copies by ~eps / (the leading matrix's condition) ~2e-8 at LEAD_CONDITION (a
+#: defective double eigenvalue, a fold, by ~its square root, 1.5e-4, but there one vector
+#: is the root's); a complex pair within it is such a shared real eigenvalue, split by
+#: rounding. Each member is split at its own value, not at the cluster's mean: two roots
+#: whose eliminated joints differ by 1e-7 rad and whose monomial vectors are nearly
+#: parallel (a CRX-10iA pose near q5 = 0, roots 8e-3 rad apart) are exact at their own
+#: members, mixed at the mean.
+CLUSTER = 1e-3
 
 
-@jit
-def _rigid_inverse(T: NDArray[np.float64]) -> NDArray[np.float64]:
-    out = np.eye(4)
-    for r in range(3):
-        for c in range(3):
-            out[r, c] = T[c, r]
-        out[r, 3] = -(T[0, r] * T[0, 3] + T[1, r] * T[1, 3] + T[2, r] * T[2, 3])
-    return out
+#: Most starts one elimination gives: 24 eigenvalues, each in a cluster split MAX_SPLIT ways.
+MAX_PER_POSE = 24 * MAX_SPLIT
+
+
+#: Most candidates one pose can give: its own, the moved pose's and the fallback starts of
+#: :func:`all_candidates` (at most FALLBACK_STARTS, :mod:`dhkin.ik.general6r_moves`).
+MAX_CANDIDATES = 2 * MAX_PER_POSE + 32
 
 
 @jit
@@ -92,22 +97,44 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
                phi: NDArray[np.float64], D0_inverse: NDArray[np.float64],
                E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
                direction: NDArray[np.float64], offset: NDArray[np.float64],
-               T_dh: NDArray[np.float64], out: NDArray[np.float64],
+               dggev: object, solve_ill: bool, T_dh: NDArray[np.float64],
+               out: NDArray[np.float64], origin: NDArray[np.int64],
                info: NDArray[np.float64]) -> int:
-    """Joint values of every near-real eigenvalue for the target T_dh (4, 4), DH frame 0 ->
-    DH frame 6 of the exact chain, into out (MAX_CANDIDATES, 6); returns their number.
+    """Joint values of every root the eigenproblem of the target T_dh (4, 4), DH frame 0 ->
+    DH frame 6 of the exact chain, holds, into the rows of out; returns their number (at most
+    out's rows). The eigenvalues come from dgeev on the companion matrix where the leading
+    matrix is well conditioned, else (``solve_ill``; none without it) from QZ on the pencil
+    (``dggev``: :data:`dhkin.ik.compiled.general6r_qz.DGGEV`).
+    origin[i]: bits of where row i comes from: PAIRED, a complex pair of eigenvalues (its
+    imaginary angle beyond CLUSTER, within the band); SHARED, a cluster of eigenvalues (its
+    root's fold partner is probed, :func:`dhkin.ik.compiled.general6r_roots.settle`).
     info[0]: the reciprocal condition (1-norm) of the leading matrix used (below
     LEAD_CONDITION: no angle gave a well-conditioned one, the pose's eigenproblem is
-    ill-conditioned); info[1]: how many candidates come from real eigenvalues (they come
-    first; then one per near-real complex pair, whose two members share their real part)."""
+    ill-conditioned; NaN: the pose's quantities are not finite, no candidate). info[1]: 1
+    where a cluster holds more than MAX_SPLIT eigenvalues (a curve of solutions with all its
+    members at one value of the eliminated joint: a defective multiple eigenvalue whose
+    computed copies scatter by eps^(1 / order), ~1e-3 at order 12 on the CRX-10iA, and whose
+    null space holds the curve's vectors besides the roots'), else 0.
+
+    Near-real eigenvalues (angle's imaginary part within the band) whose angles lie within
+    CLUSTER of each other are one cluster of m: at each distinct member the m-dimensional
+    null space of M is split into one monomial vector per root
+    (:func:`dhkin.ik.compiled.general6r_null.split`; m = 1: inverse iteration), and each
+    vector's joints are back-substituted
+    (:func:`dhkin.ik.compiled.general6r_back.back_substitute`)."""
     shift, k, reverse = setup[SHIFT], int(setup[K]), setup[REVERSED] != 0.0
-    target = _rigid_inverse(T_dh) if reverse else T_dh
+    target = rigid_inverse(T_dh) if reverse else T_dh
     H = D0_inverse @ target @ E_inverse
     for r in range(3):
         H[r, 3] /= setup[SCALE]
     values = np.empty((9, 14))
     for s in range(9):
         _quantities(before[s] @ H @ after[s], values[s])
+    for s in range(9):
+        for c in range(14):
+            if not abs(values[s, c]) < math.inf:
+                info[0] = math.nan
+                return 0
     G = inv_right @ values
     Q = np.ascontiguousarray(G[:8].T)
     r_vec = G[8].copy()
@@ -139,6 +166,7 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
         if ratio >= LEAD_CONDITION:
             break
     info[0] = best
+    info[1] = 0.0
     # B and C of M(x) = A x^2 + B x + C with theta_k = lead + 2 atan(x)
     cs, sn = math.cos(lead), math.sin(lead)
     W = (Ps * cs - Pc * sn) @ half2
@@ -146,170 +174,148 @@ def candidates(P: NDArray[np.float64], before: NDArray[np.float64], after: NDArr
     Bm[:6, :9] = 2.0 * W
     Bm[6:, 3:] = 2.0 * W
     C = _sigma(Pc, Ps, P1, lead, half2)
-    AC, AB = A_inverse @ C, A_inverse @ Bm
-    # companion, stored column-major (LAPACK): work[j, i] = K[i, j]
-    work = np.zeros((24, 24))
-    for i in range(12):
-        work[12 + i, i] = 1.0
-        for j in range(12):
-            work[j, 12 + i] = -AC[i, j]
-            work[12 + j, 12 + i] = -AB[i, j]
     wr, wi = np.empty(24), np.empty(24)
-    vl = np.empty((1, 24))
-    vr = np.empty((1, 24))  # not computed: eigenvalues only (null vectors below)
-    status = _rgeev(ord("d"), ord("N"), ord("N"), 24, work.ctypes, 24, wr.ctypes, wi.ctypes,
-                    vl.ctypes, 24, vr.ctypes, 24)
-    if status != 0:
-        info[1] = 0
-        return 0
-    count = 0
+    if best >= LEAD_CONDITION:
+        AC, AB = A_inverse @ C, A_inverse @ Bm
+        # companion, stored column-major (LAPACK): work[j, i] = K[i, j]
+        work = np.zeros((24, 24))
+        for i in range(12):
+            work[12 + i, i] = 1.0
+            for j in range(12):
+                work[j, 12 + i] = -AC[i, j]
+                work[12 + j, 12 + i] = -AB[i, j]
+        vl = np.empty((1, 24))
+        vr = np.empty((1, 24))  # not computed: eigenvalues only (null vectors below)
+        status = _rgeev(ord("d"), ord("N"), ord("N"), 24, work.ctypes, 24, wr.ctypes,
+                        wi.ctypes, vl.ctypes, 24, vr.ctypes, 24)
+        if status != 0:
+            return 0
+    else:
+        if not solve_ill:
+            return 0
+        left = np.zeros((24, 24))
+        right = np.eye(24)
+        for i in range(12):
+            left[i, 12 + i] = 1.0
+            for j in range(12):
+                left[12 + i, j] = -C[i, j]
+                left[12 + i, 12 + j] = -Bm[i, j]
+                right[12 + i, 12 + j] = A[i, j]
+        if not pencil_eigenvalues(dggev, left, right, wr, wi):
+            return 0
+    # near-real eigenvalues as angles (real, imaginary part), sorted by the real part
+    real = np.empty(24)
+    imaginary = np.empty(24)
+    kept = 0
+    for index in range(24):
+        x = complex(wr[index], wi[index])
+        # x = infinity is theta_k = lead + pi (only QZ gives it: the leading matrix is
+        # singular there); beyond 1e150 the angle is pi to the last bit
+        angle = complex(math.pi, 0.0) if abs(x) > 1e150 else 2.0 * np.arctan(x)
+        if not (abs(angle.imag) <= setup[BAND]):
+            continue
+        if not (abs(angle.real) < math.inf):
+            continue
+        if wi[index] < 0.0 and abs(angle.imag) > CLUSTER:
+            continue  # a pair's second member gives the same real part
+        position = kept
+        while position > 0 and real[position - 1] > angle.real:
+            real[position], imaginary[position] = real[position - 1], imaginary[position - 1]
+            position -= 1
+        real[position], imaginary[position] = angle.real, angle.imag
+        kept += 1
     Qpinv = np.zeros((8, 14))
     for i in range(rank):
         for c in range(14):
             for rr in range(8):
                 Qpinv[rr, c] += Vt[i, rr] * U[c, i] / sv[i]
-    m = np.empty((4, 3))
-    theta = np.empty(6)
-    x45 = np.empty(9)
-    T1 = np.empty((4, 4))
-    real_count = 0
-    for order in range(48):  # real eigenvalues first, then one of each complex pair
-        index = order % 24
-        if order == 24:
-            real_count = count
-        if (order < 24) != (wi[index] == 0.0) or wi[index] < 0.0:
-            continue  # a pair's second member (wi < 0) gives the same real part
-        x = complex(wr[index], wi[index])
-        if abs(x) > 1e150:
-            continue
-        angle = 2.0 * np.arctan(x)
-        if not (abs(angle.imag) <= setup[BAND]):
-            continue
-        theta_k = lead + angle.real
-        if not _null_vector(A, Bm, C, 0.5 * angle.real, m):
-            continue
-        theta_1 = _ratio_angle(m, 0)
-        theta_2 = _ratio_angle(m, 1)
-        theta[k], theta[k + 1], theta[k + 2] = theta_k, theta_1, theta_2
-        b0 = (math.cos(theta_k), math.sin(theta_k), 1.0)
-        b1 = (math.cos(theta_1), math.sin(theta_1), 1.0)
-        b2 = (math.cos(theta_2), math.sin(theta_2), 1.0)
-        for i in range(3):
-            for j in range(3):
-                x45[3 * i + j] = b1[i] * b2[j]
-        rhs = (P[0] * b0[0] + P[1] * b0[1] + P[2]) @ x45 - r_vec
-        y = Qpinv @ rhs
-        first, second = -1, -1
-        for j in range(6):
-            if j < k or j > k + 3:
-                if first < 0:
-                    first = j
-                else:
-                    second = j
-        theta[first] = math.atan2(y[5], y[2])
-        theta[second] = math.atan2(y[7], y[6])
-        g = k + 3
-        pre = np.eye(4)
-        for j in range(g):
-            _dh(theta[j], rows[j, 0], rows[j, 1], rows[j, 2], T1)
-            pre = pre @ T1
-        post = np.eye(4)
-        for j in range(g + 1, 6):
-            _dh(theta[j], rows[j, 0], rows[j, 1], rows[j, 2], T1)
-            post = post @ T1
-        A_g = _rigid_inverse(pre) @ H @ _rigid_inverse(post)
-        theta[g] = math.atan2(A_g[1, 0], A_g[0, 0])
-        for j in range(6):
-            v = theta[j] - phi[j]
-            if reverse:
-                out[count, 5 - j] = (-v - offset[5 - j]) / direction[5 - j]
+    vectors = np.empty((MAX_SPLIT, 12))
+    V = np.empty((12, MAX_SPLIT))
+    count = 0
+    first = 0
+    while first < kept:
+        last = first + 1
+        while last < kept and real[last] - real[last - 1] < CLUSTER:
+            last += 1
+        m = min(last - first, MAX_SPLIT)
+        if last - first > MAX_SPLIT:
+            info[1] = 1.0  # more roots at one value than a split separates: a curve
+        for member in range(first, last):
+            if member > first and real[member] == real[member - 1]:
+                continue  # the two members of a pair: one null space
+            angle = real[member]
+            half = 0.5 * angle
+            if m == 1:
+                if not null_vector(A, Bm, C, half, vectors[0]):
+                    continue
             else:
-                out[count, j] = (v - offset[j]) / direction[j]
-        count += 1
-    info[1] = real_count
+                basis = np.ascontiguousarray(V[:, :m])
+                if not null_space(A, Bm, C, half, m, basis):
+                    continue
+                split(basis, vectors[:m])
+            for v in range(m):
+                if count >= out.shape[0]:
+                    return count
+                back_substitute(P, Q, rank, Qpinv, r_vec, rows, phi, direction, offset, k,
+                                reverse, H, lead + angle, vectors[v], out[count])
+                origin[count] = ((PAIRED if abs(imaginary[member]) > CLUSTER else 0)
+                                 | (SHARED if m > 1 else 0))
+                count += 1
+        first = last
     return count
 
 
 @jit
-def _null_vector(A: NDArray[np.float64], B: NDArray[np.float64], C: NDArray[np.float64],
-                 half: float, out: NDArray[np.float64]) -> bool:
-    """The null vector of M(x) = A x^2 + B x + C at x = tan(half) (a real eigenvalue, or the
-    real part of a near-real pair), by two steps of inverse iteration on the 12 x 12 matrix
-    (one LU with partial pivoting, :func:`_lu`), into out (4, 3): the monomials x_a^i x_b^j up
-    to scale. Where |x| > 1 the reversed polynomial A + B y + C y^2, y = 1 / x, is used (the
-    same null vector; x = infinity is y = 0). Returns False if the iteration breaks down (not
-    finite)."""
-    c, s = math.cos(half), math.sin(half)
-    if abs(s) <= abs(c):
-        t = s / c
-        M = A * (t * t) + B * t + C
-    else:
-        y = c / s
-        M = A + B * y + C * (y * y)
-    pivots = np.empty(12, np.int64)
-    _lu(M, pivots)
-    v = np.ones(12)
-    for _ in range(2):
-        _lu_solve(M, pivots, v)
-        size = 0.0
-        for i in range(12):
-            size = max(size, abs(v[i]))
-        if not (size > 0.0 and size < math.inf):
-            return False
-        for i in range(12):
-            v[i] /= size
-    for i in range(4):
-        for j in range(3):
-            out[i, j] = v[3 * i + j]
-    return True
-
-
-@jit
-def _lu(M: NDArray[np.float64], pivots: NDArray[np.int64]) -> None:
-    """LU factorisation with partial pivoting of the square M, in place (L unit lower, U
-    upper; row i was swapped with pivots[i]). A pivot of exactly zero (M singular in the
-    arithmetic: the eigenvalue exact) is replaced by rounding's size, eps |M|, as inverse
-    iteration does, so that the solve below amplifies the null direction instead of
-    failing."""
-    n = M.shape[0]
-    tiny = 0.0
-    for i in range(n):
-        for j in range(n):
-            tiny = max(tiny, abs(M[i, j]))
-    tiny = max(tiny * 2.220446049250313e-16, 1e-300)
-    for k in range(n):
-        p = k
-        for i in range(k + 1, n):
-            if abs(M[i, k]) > abs(M[p, k]):
-                p = i
-        pivots[k] = p
-        if p != k:
-            for j in range(n):
-                M[k, j], M[p, j] = M[p, j], M[k, j]
-        if M[k, k] == 0.0:
-            M[k, k] = tiny
-        for i in range(k + 1, n):
-            factor = M[i, k] / M[k, k]
-            M[i, k] = factor
-            for j in range(k + 1, n):
-                M[i, j] -= factor * M[k, j]
-
-
-@jit
-def _lu_solve(LU: NDArray[np.float64], pivots: NDArray[np.int64], v: NDArray[np.float64]) -> None:
-    """v <- M^-1 v from :func:`_lu`'s factors, in place."""
-    n = LU.shape[0]
-    for k in range(n):
-        p = pivots[k]
-        if p != k:
-            v[k], v[p] = v[p], v[k]
-    for i in range(n):
-        for j in range(i):
-            v[i] -= LU[i, j] * v[j]
-    for i in range(n - 1, -1, -1):
-        for j in range(i + 1, n):
-            v[i] -= LU[i, j] * v[j]
-        v[i] /= LU[i, i]
+def all_candidates(P: NDArray[np.float64], before: NDArray[np.float64],
+                   after: NDArray[np.float64], inv_right: NDArray[np.float64],
+                   mix: NDArray[np.float64], half2: NDArray[np.float64],
+                   rows: NDArray[np.float64], phi: NDArray[np.float64],
+                   D0_inverse: NDArray[np.float64], E_inverse: NDArray[np.float64],
+                   setup: NDArray[np.float64], direction: NDArray[np.float64],
+                   offset: NDArray[np.float64], perturbations: NDArray[np.float64],
+                   fallback: NDArray[np.float64], dggev: object, T_dh: NDArray[np.float64],
+                   out: NDArray[np.float64],
+                   origin: NDArray[np.int64], info: NDArray[np.float64]) -> int:
+    """:func:`candidates` of T_dh; where its eigenproblem is ill-conditioned (info[0] below
+    LEAD_CONDITION: the matrix polynomial is singular, or nearly, at this pose) instead, and
+    where an eigenvalue is degenerate (a curve of solutions at one value of the eliminated
+    joint) as well, those of the poses ``perturbations[p] @ T_dh`` (small rigid motions in
+    DH frame 0, :func:`dhkin.ik.general6r.perturbations`), whose eigenproblems are regular
+    (solved by QZ where still ill-conditioned) with simple eigenvalues: every real root of a
+    moved pose is among its eigenvalues, and
+    every regular root of T_dh lies near one of them, within Newton's reach
+    (docs/general6r.md, "Every root"). info[0]: the leading matrix's reciprocal condition at
+    T_dh; info[1]: 1 where the moved poses were used, else 0. The starts of moved pose p have
+    origin bit MOVED << p (their root is followed back to T_dh where Newton does not reach it
+    at once, :func:`dhkin.ik.compiled.general6r_track.track`). With the moved poses, the
+    ``fallback`` starts (fixed joint vectors, :data:`dhkin.ik.general6r_moves.FALLBACK_STARTS`)
+    are starts too: near a highly degenerate singular set (a stretched arm with a free wrist)
+    a moved pose's own eigenproblem can lose the roots it has there."""
+    count = candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
+                       E_inverse, setup, direction, offset, dggev, False, T_dh, out, origin,
+                       info)
+    if math.isnan(info[0]):
+        return count
+    if info[0] >= LEAD_CONDITION and info[1] == 0.0:
+        return count
+    info[1] = 1.0
+    inner = np.empty(2)
+    for p in range(perturbations.shape[0]):
+        moved = np.ascontiguousarray(perturbations[p]) @ T_dh
+        first = count
+        count += candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
+                            E_inverse, setup, direction, offset, dggev, True, moved,
+                            out[count:], origin[count:], inner)
+        for index in range(first, count):
+            origin[index] |= MOVED << p
+    for index in range(fallback.shape[0]):
+        if count >= out.shape[0]:
+            break
+        for j in range(6):
+            out[count, j] = fallback[index, j]
+        origin[count] = 0
+        count += 1
+    return count
 
 
 @jit
@@ -321,29 +327,16 @@ def _safe_inverse(M: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.full((12, 12), np.inf)
 
 
-@jit
-def _ratio_angle(m: NDArray[np.float64], axis: int) -> float:
-    """2 atan2(next, this) on the pair of consecutive monomials along ``axis`` of largest
-    size (m[i, j] ~ x_a^i x_b^j)."""
-    best, a, b = -1.0, 0.0, 1.0
-    if axis == 0:
-        for i in range(3):
-            for j in range(3):
-                size = m[i, j] ** 2 + m[i + 1, j] ** 2
-                if size > best:
-                    best, a, b = size, m[i, j], m[i + 1, j]
-    else:
-        for i in range(4):
-            for j in range(2):
-                size = m[i, j] ** 2 + m[i, j + 1] ** 2
-                if size > best:
-                    best, a, b = size, m[i, j], m[i, j + 1]
-    return 2.0 * math.atan2(b, a)
-
-
 #: Layout of :func:`solve_pose`'s ``info``: the pose's projection, candidates that did not
-#: verify.
-PROJECTION, FAILED = 0, 1
+#: verify, roots found (where it returns SETTLED).
+PROJECTION, FAILED, FOUND = 0, 1, 2
+
+
+#: :func:`solve_pose`'s answers other than a row count: the Python path answers (an input to
+#: reject, a pose out of reach); the roots are settled in the buffers but the Python path
+#: finishes (a singular root: the seed's member; no root, or no copy within the limits: the
+#: reason).
+REJECT, SETTLED = -1, -2
 
 
 @jit
@@ -353,48 +346,64 @@ def solve_pose(P: NDArray[np.float64], before: NDArray[np.float64],
                phi: NDArray[np.float64], D0_inverse: NDArray[np.float64],
                E_inverse: NDArray[np.float64], setup: NDArray[np.float64],
                direction: NDArray[np.float64], offset: NDArray[np.float64],
-               base_inverse: NDArray[np.float64], tool_inverse: NDArray[np.float64],
-               chain: NDArray[np.float64], T: NDArray[np.float64], seed: NDArray[np.float64],
+               perturbations: NDArray[np.float64], moves: NDArray[np.float64],
+               fallback: NDArray[np.float64], dggev: object,
+               base_inverse: NDArray[np.float64],
+               tool_inverse: NDArray[np.float64], chain: NDArray[np.float64],
+               T: NDArray[np.float64], seed: NDArray[np.float64], reach: float,
                tolerance: float, lever: float, band: float, lower: NDArray[np.float64],
                upper: NDArray[np.float64], slack: float, starts: NDArray[np.float64],
-               roots: NDArray[np.float64], errors: NDArray[np.float64],
-               sigmas: NDArray[np.float64], out_q: NDArray[np.float64],
-               out_errors: NDArray[np.float64], kept: NDArray[np.int64],
-               info: NDArray[np.float64]) -> int:
+               origin: NDArray[np.int64], roots: NDArray[np.float64],
+               errors: NDArray[np.float64], sigmas: NDArray[np.float64],
+               out_q: NDArray[np.float64], out_errors: NDArray[np.float64],
+               kept: NDArray[np.int64], info: NDArray[np.float64]) -> int:
     """The general solver's single call in one kernel, for the common case (the Python path,
     :meth:`dhkin.ik.general6r.General6RSolver._solve`, does the same in steps): the pose T
     (base_link -> tool0) checked (:func:`dhkin.ik.compiled.pose.status`) and projected, its
-    candidates (:func:`candidates`), refined, verified at ``tolerance`` (the verification
-    tolerance) and merged (:func:`settle`, ``seed`` the seed's start), each root's in-limit
-    copy nearest ``seed`` (:func:`nearest_copies`, ``slack``). Returns the number of rows
-    written to out_q, out_errors (all regular), or -1 where the Python path must answer: a
-    pose or seed not usable (it raises the error), a singular root or an ill-conditioned
-    eigenproblem (the seed's member of a curve of solutions), or no solution (the reason)."""
+    DH frame 6 within ``reach`` of DH frame 0, its candidates (:func:`all_candidates`),
+    refined, verified at ``tolerance`` (the verification tolerance) and merged
+    (:func:`settle`), each root's in-limit copy nearest ``seed`` (:func:`nearest_copies`,
+    ``slack``). Returns the number of rows written to out_q, out_errors (all regular), or
+    REJECT where the Python path must answer (a pose or seed not usable: it raises the error;
+    out of reach: the reason), or SETTLED where the roots, their residuals and sigmas are in
+    roots, errors, sigmas (info[FOUND] of them) and the Python path finishes (a singular root:
+    the seed's member of a curve of solutions; no root or no in-limit copy: the reason)."""
     for j in range(6):
         if not abs(seed[j]) < math.inf:
-            return -1
+            return REJECT
     if status(T) != 0:
-        return -1
+        return REJECT
     target = np.eye(4)
     info[PROJECTION] = project(T, target[:3])
     tip_target = base_inverse @ target
     T_dh = tip_target @ tool_inverse
+    if not within_reach(T_dh, reach):
+        return REJECT
     eigen = np.empty(2)
-    count = candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
-                       E_inverse, setup, direction, offset, T_dh, starts, eigen)
-    ill_conditioned = not eigen[0] >= LEAD_CONDITION
-    if ill_conditioned:
-        return -1
-    for j in range(6):
-        starts[count, j] = seed[j]
-    found, failed = settle(chain, tip_target, starts, count + 1, count, tolerance, lever, band,
-                           False, int(eigen[1]), roots, errors, sigmas)
-    info[FAILED] = failed
+    count = all_candidates(P, before, after, inv_right, mix, half2, rows, phi, D0_inverse,
+                           E_inverse, setup, direction, offset, perturbations, fallback, dggev,
+                           T_dh, starts, origin, eigen)
+    found, failed = settle(chain, tip_target, starts, origin, count, moves, tolerance, lever,
+                           band, roots, errors, sigmas)
+    info[FAILED], info[FOUND] = failed, found
     if found == 0:
-        return -1
+        return SETTLED
     for k in range(found):
         if sigmas[k] <= band:
-            return -1
+            return SETTLED
     count = nearest_copies(chain, tip_target, roots, errors, found, seed, lower, upper, slack,
-                           tolerance, out_q, out_errors, kept)
-    return count if count > 0 else -1
+                           tolerance, lever, np.zeros(found, np.bool_), band, out_q,
+                           out_errors, kept)
+    return count if count > 0 else SETTLED
+
+
+@jit
+def within_reach(T_dh: NDArray[np.float64], reach: float) -> bool:
+    """Whether DH frame 6's origin (T_dh, DH frame 0 -> 6, metres) lies within ``reach`` of DH
+    frame 0's: no chain of rigid links and rotations places it farther than the sum of its
+    links' lengths (:attr:`dhkin.ik.general6r.General6RSolver.reach`). Checked by the largest
+    coordinate first, so that a far pose (1e300 m) does not overflow."""
+    largest = max(abs(T_dh[0, 3]), abs(T_dh[1, 3]), abs(T_dh[2, 3]))
+    if not largest <= reach:
+        return False
+    return math.sqrt(T_dh[0, 3] ** 2 + T_dh[1, 3] ** 2 + T_dh[2, 3] ** 2) <= reach

@@ -1,0 +1,149 @@
+"""The validator's independent complete reference for six-revolute arms without a closed form:
+every isolated root of a pose, found by Newton's method from many fixed starts, each verified
+on the oracle (see :mod:`dhkin.validation.run`, ``missing_branch``).
+
+An arm with a closed-form family is checked against its family's branches; an arm without one
+(the CRX-10iA, the xArm6, tilted or calibrated six-revolute tables: ``robot.ik_family ==
+"general6r"``) has no such branches, and the general 6R solver's own answer cannot be the
+reference of the general 6R solver. This reference shares nothing with it but the exact chain:
+Newton (:func:`dhkin.ik.compiled.general6r_reference.multistart`) runs on dhkin's exact chain
+of the table (corrections included, equal to Pinocchio's FK to ~1e-15: ``dhkin check``'s "fk
+vs pin"), from :data:`STARTS` joint vectors drawn once with a fixed seed, no elimination. Each
+distinct root then verifies on the reference description (Pinocchio) at the tolerance plus its
+deviation from the table, and its Jacobian there says whether it is isolated.
+
+Joint values are URDF joint values (rad, chain order); poses are base_link -> tool0, metres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dhkin.arm import Arm
+from dhkin.transforms import pose_error
+from dhkin.validation.references import TargetModel
+
+#: Starts per pose: the first points of a scrambled Halton sequence over the joint torus (fixed
+#: seed), which covers it more evenly than random points. Measured (docs/general6r.md,
+#: "Checking completeness") on 100 poses each of five sets (CRX-10iA random and special
+#: angles, xArm6 special angles, tilted UR5 special angles and q5 = 0): of the 3,836 isolated
+#: roots a 2,000-start random multistart found, 128 starts missed 15 (0.4 %), 256 missed 1;
+#: 128 cost ~5 ms per pose.
+STARTS = 128
+
+
+#: A reference root is isolated, and must be returned, when the smallest singular value of
+#: Pinocchio's Jacobian there (m and rad) is at least this. Below it a root is a fold's double
+#: root or lies on a curve of solutions (a free joint): the pose fixes it only to about
+#: sqrt(tolerance), and which member an IK returns is its (or its seed's) choice.
+ISOLATED = 1e-6
+
+
+#: Seed of the starts (fixed: a run is reproducible and the same starts serve every pose).
+START_SEED = 26
+
+
+#: Most distinct roots kept per pose: a six-revolute chain has at most 16 isolated roots;
+#: the rest is room for the members of curves of solutions a multistart also lands on.
+MAX_ROOTS = 64
+
+
+def needs_reference(robot: Arm) -> bool:
+    """Whether ``robot``'s completeness is judged by this reference: six revolute joints and
+    no closed-form family (the general 6R solver's arms)."""
+    return robot.ik_family == "general6r"
+
+
+class RootReference:
+    """Every isolated root of a pose of ``robot`` by Newton from ``starts`` fixed starts,
+    verified on ``model`` (see the module docstring)."""
+
+    def __init__(self, robot: Arm, model: TargetModel, starts: int = STARTS) -> None:
+        from dhkin.ik.plan import chain_array
+
+        table = robot.table
+        chain = chain_array(table)
+        frame = np.eye(4)
+        frame[:3] = chain[-1, :12].reshape(3, 4)
+        chain[-1, :12] = (frame @ table.tool)[:3].ravel()  # to tool0, the point verified
+        self.robot = robot
+        self.model = model
+        self.chain = chain
+        self.base_inverse = np.linalg.inv(table.base)
+        from scipy.stats import qmc
+
+        unit = qmc.Halton(robot.dof, scramble=True, seed=START_SEED).random(starts)
+        self.starts = np.ascontiguousarray(np.pi * (2.0 * unit - 1.0))
+
+    def roots(self, T: NDArray[np.float64], tolerance: float) -> NDArray[np.float64]:
+        """The distinct roots (k, 6) of the pose T (base_link -> tool0) that verify on the
+        reference description at ``tolerance`` plus its deviation, are isolated
+        (:data:`ISOLATED`) and have a 2pi copy within the joint limits (that copy)."""
+        from dhkin.ik.compiled.general6r_reference import multistart
+
+        target = np.ascontiguousarray((self.base_inverse @ T)[:3])
+        found = np.empty((MAX_ROOTS, self.robot.dof))
+        allowed = tolerance + self.model.deviation
+        count = multistart(self.chain, target, self.starts, allowed, len(self.starts), found)
+        roots = self._in_limits(found[:count])
+        if not len(roots):
+            return roots
+        position, rotation = pose_error(self.model.fk(roots),
+                                        np.broadcast_to(T, (len(roots), 4, 4)))
+        roots = roots[(position <= allowed) & (rotation <= allowed)]
+        sigma = np.array([np.linalg.svd(self.model.reference.jacobian(q), compute_uv=False)[-1]
+                          for q in roots])
+        return roots[sigma >= ISOLATED] if len(roots) else roots
+
+    def _in_limits(self, roots: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Each root's 2pi copy nearest the middle of the limits, those within them."""
+        lower, upper = self.robot.lower, self.robot.upper
+        middle = 0.5 * (lower + upper)
+        shifted = roots + 2.0 * np.pi * np.rint((middle - roots) / (2.0 * np.pi))
+        inside = np.all((shifted >= lower) & (shifted <= upper), axis=1)
+        return shifted[inside]
+
+
+def missing_roots(model: TargetModel, T: NDArray[np.float64], roots: NDArray[np.float64],
+                  Q: NDArray[np.float64], tolerance: float,
+                  joint_tolerance: float) -> list[tuple[NDArray[np.float64], float]]:
+    """(root, distance to the closest row of Q) of each reference root (k, 6) of the pose T
+    that no row of Q (the IK's solutions) is: within ``joint_tolerance`` of it (mod 2pi), or
+    one root with it at the tolerance (every point a quarter, a half and three quarters of the
+    way from the root to that row verifies on the reference description: the solver's merging
+    rule, judged on the oracle; a double root split by rounding, or a member of the same curve
+    of solutions, is one root with its halves; two distinct roots are not)."""
+    missing = []
+    allowed = tolerance + model.deviation
+    for root in roots:
+        if not len(Q):
+            missing.append((root, float("inf")))
+            continue
+        step = np.mod(Q - root + np.pi, 2.0 * np.pi) - np.pi
+        distance = np.abs(step).max(axis=1)
+        nearest = int(np.argmin(distance))
+        if distance[nearest] <= joint_tolerance:
+            continue
+        points = root + np.outer([0.25, 0.5, 0.75], step[nearest])
+        position, rotation = pose_error(model.fk(points), np.broadcast_to(T, (3, 4, 4)))
+        if np.all(position <= allowed) and np.all(rotation <= allowed):
+            continue
+        missing.append((root, float(distance[nearest])))
+    return missing
+
+
+def check_reference(model: TargetModel, reference: RootReference, T: NDArray[np.float64],
+                    Q: NDArray[np.float64], tolerance: float,
+                    joint_tolerance: float) -> tuple[str, str, list[str]]:
+    """The IK's unseeded answer Q (its verified solutions of the pose T) against the
+    multistart reference's isolated roots: (outcome, detail, the roots it lacks)."""
+    lacking = missing_roots(model, T, reference.roots(T, tolerance), Q, tolerance,
+                            joint_tolerance)
+    if not lacking:
+        return "success", "", []
+    names = ["root q=(" + ", ".join(f"{v:.6f}" for v in root) + ")" for root, _ in lacking]
+    return "missing_branch", (
+        f"{len(lacking)} isolated root(s) of the multistart reference not returned unseeded: "
+        + "; ".join(f"{name} (closest solution differs by {closest:.2e})"
+                    for name, (_, closest) in zip(names, lacking, strict=True))), names

@@ -89,6 +89,30 @@ def test_ik_batch_equals_ik_pose_by_pose(robot, copies):
     assert not batch.valid[-5:].any()  # the unreachable ones
 
 
+@pytest.mark.parametrize("name", ["ur5", "abb_irb1200_7_70"])
+def test_rounded_poses_give_ik_answers_in_a_batch(load_robot, name):
+    """A batch projects the rotation blocks of eight poses at once, each pose stopping at its own
+    Newton step; a single call projects its pose alone. Poses rounded to six decimals and to
+    float32 (several steps each, mixed with exact ones that stop after one) give ik's solutions,
+    residuals and projection pose by pose, bit for bit."""
+    robot = load_robot(name)
+    T, seeds = pose_set(robot, 96, seed=11)
+    rounded = np.round(T, 6)
+    short = T.astype(np.float32).astype(np.float64)
+    rounded[:, 3] = short[:, 3] = [0.0, 0.0, 0.0, 1.0]
+    targets = np.ascontiguousarray(np.stack([T, rounded, short], axis=1).reshape(-1, 4, 4))
+    seeds = np.repeat(seeds, 3, axis=0)
+    batch = robot.ik_batch_detailed(targets, seeds)
+    for moved in (batch.projection[1::3], batch.projection[2::3]):  # special angles round exactly
+        assert np.count_nonzero(moved > 1e-8) >= len(T) // 2
+    for i in range(len(targets)):
+        solutions = robot.ik(targets[i], seeds[i])
+        keep = batch.valid[i]
+        np.testing.assert_array_equal(solutions.q, batch.q[i][keep])
+        np.testing.assert_array_equal(solutions.residuals, batch.residuals[i][keep])
+        assert solutions.projection == batch.projection[i]
+
+
 def test_chunk_sizes_and_streaming_give_identical_results(robot):
     T, seeds = pose_set(robot, 90, seed=8)
     whole = robot.ik_batch_detailed(T, seeds)

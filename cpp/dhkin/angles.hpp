@@ -85,11 +85,23 @@ inline double atan_table(std::int64_t bits) {
   return kAtanTable[k < 8 ? k : 8];
 }
 DHKIN_INLINE Lanes atan_table(const LaneBits& bits) {
+#if defined(__AVX512F__)
+  // one two-register permutation: entries 0..8 of the table, then entry 8 up to index 15
+  const __m512d low = _mm512_loadu_pd(kAtanTable);
+  const __m512d high = _mm512_set1_pd(kAtanTable[8]);
+  Lanes out;
+  for (int k = 0; k < simd::kParts; ++k) {
+    const __m512i index = _mm512_and_si512((__m512i)bits.v[k], _mm512_set1_epi64(15));
+    out.v[k] = (simd::Doubles)_mm512_permutex2var_pd(low, index, high);
+  }
+  return out;
+#else
   alignas(64) std::int64_t index[kLanes];
   alignas(64) double out[kLanes];
   std::memcpy(index, &bits.v, sizeof index);
   for (int l = 0; l < kLanes; ++l) out[l] = atan_table(index[l]);
   return Lanes::load(out);
+#endif
 }
 
 // (sin x, cos x) for |x| < 2^19: reduction by multiples of pi/2, Taylor polynomials on

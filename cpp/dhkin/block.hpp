@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cmath>
+#include <new>
 
 #include "dhkin/direct.hpp"
 #include "dhkin/plan.hpp"
@@ -30,7 +31,6 @@ struct BlockAnswer {
   std::array<bool, kLanes> answered{};  // the direct path answered this pose (usable, regular)
   std::array<int, kLanes> status{};     // a PoseStatus (kUsable or why not)
   std::array<double, kLanes> projection{};
-  std::array<int, kLanes> candidates{};  // branches with a verified solution (answered lanes)
   std::array<JointsT<Lanes>, kBranches> q{};
   std::array<Mask, kBranches> ok{};
   std::array<LaneBits, kBranches> flags{};
@@ -63,21 +63,76 @@ struct FrameColumns {
   }
 };
 
+// Whether a and b hold the same bits in every lane.
+DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_of(a) != bits_of(b)); }
+
 }  // namespace block
 
 // check() of each branch's candidate q[b] (lanes: poses) against `target`, for the branches
 // `wanted` in some lane: every joint's sine and cosine first (independent work for the
-// processor to overlap), then each branch's chain.
+// processor to overlap), then each branch's chain. Branches share joint values (the two wrist
+// branches of a spherical wrist share q1-q3, the four branches of one shoulder q1): a joint value
+// with the bits of an earlier branch's, in every lane, takes that branch's sine and cosine, and a
+// branch whose first k joint values are an earlier branch's starts from that branch's frame after
+// k joints; the frames advance joint by joint for all branches together. The same operations on
+// the same values as check() per branch, so the same bits.
 inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
                            const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
                            std::array<PoseErrorT<Lanes>, kBranches>& errors) {
+  using block::same_bits;
   const ChainShape shape(chain);
+  const int n = chain.dof();
   std::array<JointMotions<Lanes>, kBranches> motions;
+  // per branch: the earliest wanted branch with the longest run of equal leading joint values
+  // (source, -1 for none) and that run's length (shared). A source shares fewer joints with its
+  // own source than with the branch: a branch sharing no more than that would have taken the
+  // earlier one.
+  int source[kBranches], shared[kBranches];
   for (int b = 0; b < kBranches; ++b) {
-    if (wanted[b]) joint_motions(chain, q[b].data(), motions[b]);
+    source[b] = -1, shared[b] = 0;
+    if (!wanted[b]) continue;
+    for (int a = 0; a < b; ++a) {
+      if (!wanted[a]) continue;
+      int k = 0;
+      while (k < n && same_bits(q[a][k], q[b][k])) ++k;
+      if (k > shared[b]) shared[b] = k, source[b] = a;
+    }
+    for (int j = 0; j < n; ++j) {
+      int from = -1;
+      for (int a = 0; a < b && from < 0; ++a) {
+        if (wanted[a] && same_bits(q[a][j], q[b][j])) from = a;
+      }
+      if (from < 0) {
+        joint_motion(chain, j, q[b][j], motions[b]);
+      } else {  // joint_motion's outputs: the variable, and the turn of a revolute joint
+        motions[b].variable[j] = motions[from].variable[j];
+        if (chain.joints[j].revolute) motions[b].turn[j] = motions[from].turn[j];
+      }
+    }
+  }
+  // joint by joint, every branch's frame (independent work for the processor to overlap): a
+  // branch starts as a copy of its source's frame once that has `shared` joints (the source
+  // started before: see above)
+  alignas(64) unsigned char storage[kBranches][sizeof(FrameT<Lanes>)];
+  FrameT<Lanes>* state[kBranches] = {};
+  for (int j = 0; j <= n; ++j) {
+    for (int b = 0; b < kBranches; ++b) {
+      if (!wanted[b]) continue;
+      if (source[b] < 0 && j == 0) {
+        state[b] = new (storage[b]) FrameT<Lanes>(broadcast<Lanes>(chain.joints[0].before));
+      } else if (source[b] >= 0 && j == shared[b]) {
+        state[b] = new (storage[b]) FrameT<Lanes>(*state[source[b]]);
+      }
+    }
+    if (j == n) break;
+    for (int b = 0; b < kBranches; ++b) {
+      if (state[b] != nullptr) chain_step(chain, shape, motions[b], j, *state[b]);
+    }
   }
   for (int b = 0; b < kBranches; ++b) {
-    if (wanted[b]) errors[b] = pose_error(chain_frame(chain, shape, motions[b]), target);
+    if (!wanted[b]) continue;
+    times_constant(*state[b], chain.tail, shape.tail);
+    errors[b] = pose_error(*state[b], target);
   }
 }
 
@@ -86,24 +141,29 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
 inline void direct_block(const Plan& plan, const TargetFrames& frames, const PoseBlock& poses,
                          double tolerance, BlockAnswer& out) {
   tolerance = plan.verification_tolerance(tolerance);
-  block::FrameColumns projected;
+  block::FrameColumns raw;
   alignas(64) double seeds[kDof][kLanes];
   Mask declined = every_lane<Lanes>(false);
   for (int l = 0; l < kLanes; ++l) {
     const int i = l < poses.count ? l : poses.count - 1;
     Joints seed;
     for (int j = 0; j < kDof; ++j) seed[j] = seeds[j][l] = poses.seed[i][j];
-    Frame pose;  // the identity where the pose is rejected
-    out.projection[l] = 0.0;
-    if (!projected_pose(poses.T[i], seed, out.status[l], out.projection[l], pose)) {
+    out.status[l] = pose_and_seed_status(poses.T[i], seed);
+    if (out.status[l] == kUsable) {
+      raw.put(l, raw_frame(poses.T[i]));
+    } else {
+      raw.put(l, Frame{});  // the identity where the pose is rejected
       set_lane(declined, l, true);  // rejected: the caller reports it
       for (int j = 0; j < kDof; ++j) seeds[j][l] = 0.0;
     }
-    projected.put(l, pose);
   }
   for (int j = 0; j < kDof; ++j) out.seed[j] = Lanes::load(seeds[j]);
+  // the rotations projected, every lane at once (projected_pose's, lane by lane)
+  Lanes moved;
+  const FrameT<Lanes> projected = projected_frame<Lanes>(raw.frames(), !declined, moved);
+  for (int l = 0; l < kLanes; ++l) out.projection[l] = lane(declined, l) ? 0.0 : lane(moved, l);
   FrameT<Lanes> T_dh;
-  targets_of(frames, projected.frames(), T_dh, out.T_at);
+  targets_of(frames, projected, T_dh, out.T_at);
   CandidatesT<Lanes> found;
   plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
   out.why = found.why;
@@ -136,8 +196,6 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   }
   for (int l = 0; l < kLanes; ++l) {
     out.answered[l] = !lane(declined, l);
-    out.candidates[l] = 0;
-    for (int b = 0; b < kBranches; ++b) out.candidates[l] += lane(out.ok[b], l) ? 1 : 0;
   }
 }
 

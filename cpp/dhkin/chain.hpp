@@ -143,19 +143,25 @@ DHKIN_INLINE void joint_motions(const Chain& chain, const V* q, JointMotions<V>&
   for (int j = 0; j < chain.dof(); ++j) joint_motion(chain, j, q[j], out);
 }
 
+// Joint j's step of chain_frame: state (the frame after j joints, P_1 Z_1 ... Z_j) becomes the
+// frame after j + 1 joints.
+template <class V>
+DHKIN_INLINE void chain_step(const Chain& chain, const ChainShape& shape,
+                             const JointMotions<V>& motions, int j, FrameT<V>& state) {
+  if (j > 0) times_constant(state, chain.joints[j].before, shape.before[j]);
+  if (chain.joints[j].revolute) {
+    turn_about_z(state, motions.turn[j].c, motions.turn[j].s);
+  } else {
+    slide_along_z(state, motions.variable[j]);
+  }
+}
+
 // T(q) of a chain of at most kDof joints from its motions at q.
 template <class V>
 DHKIN_INLINE FrameT<V> chain_frame(const Chain& chain, const ChainShape& shape,
                                    const JointMotions<V>& motions) {
   FrameT<V> state = broadcast<V>(chain.joints[0].before);
-  for (int j = 0; j < chain.dof(); ++j) {
-    if (j > 0) times_constant(state, chain.joints[j].before, shape.before[j]);
-    if (chain.joints[j].revolute) {
-      turn_about_z(state, motions.turn[j].c, motions.turn[j].s);
-    } else {
-      slide_along_z(state, motions.variable[j]);
-    }
-  }
+  for (int j = 0; j < chain.dof(); ++j) chain_step(chain, shape, motions, j, state);
   times_constant(state, chain.tail, shape.tail);
   return state;
 }

@@ -11,7 +11,10 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
+#include "dhkin/branch_lanes.hpp"
 #include "dhkin/lanes.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
@@ -25,18 +28,22 @@ struct PoseTargets {
   Frame T_at;  // T_dh followed by the TCP point: the target of the plan's chains
 };
 
-// The pose's status (a PoseStatus; the seed's too), and its rotation projected onto the nearest
-// rotation (`projection`: how far). False when the pose is not usable.
+// The pose's status (a PoseStatus), or kBadSeed for a usable pose whose seed is not finite.
+inline int pose_and_seed_status(const double* T, const Joints& seed) {
+  const int status = pose_status(T);
+  if (status != kUsable) return status;
+  for (double v : seed) {
+    if (!std::isfinite(v)) return kBadSeed;
+  }
+  return kUsable;
+}
+
+// The same status, and the pose's rotation projected onto the nearest rotation (`projection`:
+// how far). False when the pose is not usable.
 inline bool projected_pose(const double* T, const Joints& seed, int& status, double& projection,
                            Frame& projected) {
-  status = pose_status(T);
+  status = pose_and_seed_status(T, seed);
   if (status != kUsable) return false;
-  for (double v : seed) {
-    if (!std::isfinite(v)) {
-      status = kBadSeed;
-      return false;
-    }
-  }
   projected = projected_frame(T, projection);
   return true;
 }
@@ -70,12 +77,73 @@ inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints
   return pose_targets(frames, T, seed, info.status, info.projection, targets);
 }
 
+// direct_branches of the spherical-wrist and offset-wrist families: the closed form, the wrap,
+// the check and the flags with the pose's eight branches in lanes (branch_lanes.hpp); the same
+// steps on the same values as the scalar code below, so the same bits.
+inline bool direct_branch_lanes(const Plan& plan, const TargetFrames& frames, const double* T,
+                                const Joints& seed, double tolerance, Branches& branches,
+                                PoseInfo& info) {
+  tolerance = plan.verification_tolerance(tolerance);
+  PoseTargets targets;
+  if (!begin_pose(frames, T, seed, info, branches, targets)) return true;
+  const FamilyRequest request{&seed, 0, plan.seed_angle, plan.seed_length, plan.clamp(tolerance)};
+  BranchLanes found;
+  const bool regular =
+      plan.family == Family::offset_wrist
+          ? offset_wrist_lanes(plan.offset, targets.T_dh, request, found)
+          : spherical_wrist_lanes(plan.spherical, targets.T_dh, request, found);
+  if (!regular) return false;  // a seeded candidate to try: the pipeline's step 2
+  info.why = found.why;
+  JointsT<Lanes> q;  // zero where not valid (its lane is ignored)
+  for (int j = 0; j < kDof; ++j) {
+    q[j] = select(found.valid, found.q[j], Lanes(0.0));
+    if (plan.revolute(j)) q[j] = wrap(q[j]);
+  }
+  const PoseErrorT<Lanes> errors = check(plan.chain, q.data(), targets.T_at);
+  if (any(found.valid && !errors.within(tolerance))) return false;  // the pipeline's step 3
+  alignas(64) double values[kDof][kLanes], position[kLanes], rotation[kLanes];
+  alignas(64) std::int64_t flags[kLanes];
+  for (int j = 0; j < kDof; ++j) q[j].store(values[j]);
+  errors.position.store(position);
+  errors.rotation.store(rotation);
+  const LaneBits bits = (found.flags & kShoulder) | plan.value_flags(q);
+  std::memcpy(flags, &bits.v, sizeof flags);
+  for (int b = 0; b < kBranches; ++b) {
+    if (!lane(found.valid, b)) continue;
+    for (int j = 0; j < kDof; ++j) branches.q[b][j] = values[j][b];
+    branches.ok[b] = true;
+    branches.errors[b] = {position[b], rotation[b]};
+    ++info.candidates;
+  }
+  // every pair of branches a < b at once: lane a against lane b = a ^ m, for m = 1..7
+  alignas(64) static const double kIndex[kLanes] = {0, 1, 2, 3, 4, 5, 6, 7};
+  const Lanes index = Lanes::load(kIndex);
+  for (int m = 1; m < kBranches; ++m) {
+    JointsT<Lanes> other;
+    for (int j = 0; j < kDof; ++j) other[j] = swapped(q[j], m);
+    const Mask pair = found.valid && swapped(found.valid, m) && index < swapped(index, m);
+    if (any(pair && plan.same(q, other, 2.0 * kMergeAngle))) {
+      return false;  // one solution from two branches: the pipeline merges them
+    }
+  }
+  for (int b = 0; b < kBranches; ++b) {
+    if (branches.ok[b]) {
+      branches.flags[b] = static_cast<std::uint8_t>(flags[b]);
+      ++info.verified;
+    }
+  }
+  return true;
+}
+
 // Steps 1-3 for a regular pose of an exact-family table; false (outputs undefined) for a pose
 // that needs the full pipeline. A rejected pose or seed is answered here (info.status).
 inline bool direct_branches(const Plan& plan, const TargetFrames& frames, const double* T,
                             const Joints& seed, double tolerance, Branches& branches,
                             PoseInfo& info) {
   if (plan.refine) return false;
+  if (plan.family != Family::stanford) {
+    return direct_branch_lanes(plan, frames, T, seed, tolerance, branches, info);
+  }
   tolerance = plan.verification_tolerance(tolerance);
   PoseTargets targets;
   if (!begin_pose(frames, T, seed, info, branches, targets)) return true;

@@ -39,7 +39,8 @@ inline std::array<long, kBranches> copy_totals(const Plan& plan, const Branches&
 
 // Step 4 for one pose: `emit(solution)` for each solution, in order of branch, then of copy
 // (mixed radix over the joints' copies, last joint fastest); with `copies` false one per branch,
-// the copy nearest the seed. A copy set onto a limit, and every copy of a branch whose error is
+// the copy nearest the seed (the eight branches at once, one per lane: the bits the scalar
+// nearest_turn gives each). A copy set onto a limit, and every copy of a branch whose error is
 // within kCopyMargin of the tolerance, is verified again (and dropped when it fails). Returns the
 // count, or -1 as soon as `emit` returns false (no room).
 template <class Emit>
@@ -59,24 +60,28 @@ long expand(const Plan& plan, const TargetFrames& frames, const double* T, const
     return solution.error.within(tolerance);
   };
   long count = 0;
-  if (!copies) {  // one copy per branch, the one nearest the seed: no mixed-radix loop
+  if (!copies) {  // one copy per branch, the one nearest the seed: the eight branches in lanes
+    Mask ok = every_lane<Lanes>(false);
+    for (int b = 0; b < kBranches; ++b) set_lane(ok, b, branches.ok[b]);
+    Mask exists = ok, clipped = every_lane<Lanes>(false);
+    alignas(64) double nearest_q[kDof][kLanes];
+    for (int j = 0; j < kDof; ++j) {
+      const bool revolute = plan.revolute(j);
+      const Lanes q = select(ok, Lanes::gather(&branches.q[0][j], kDof), Lanes(0.0));
+      const NearestTurn<Lanes> nearest =
+          nearest_turn(plan.limits[j], revolute, q, slack, Lanes(seed[j]));
+      exists = exists && nearest.exists;
+      const Lanes copy = placed(plan.limits[j], revolute, q, nearest.turn);
+      clipped = clipped || copy != shifted(revolute, q, nearest.turn);
+      copy.store(nearest_q[j]);
+    }
     for (int b = 0; b < kBranches; ++b) {
-      if (!branches.ok[b]) continue;
-      const Joints& q = branches.q[b];
+      if (!lane(exists, b)) continue;
       Solution solution;
-      bool exists = true, clipped = false;
-      for (int j = 0; j < kDof && exists; ++j) {
-        const bool revolute = plan.revolute(j);
-        long turn = 0;
-        exists = nearest_turn(plan.limits[j], revolute, q[j], slack, seed[j], turn);
-        const double shifted = revolute ? q[j] + kTwoPi * static_cast<double>(turn) : q[j];
-        solution.q[j] = placed(plan.limits[j], revolute, q[j], turn);
-        clipped = clipped || solution.q[j] != shifted;
-      }
-      if (!exists) continue;
+      for (int j = 0; j < kDof; ++j) solution.q[j] = nearest_q[j][b];
       solution.error = branches.errors[b];
       const bool recheck = branches.errors[b].largest() > tolerance - kCopyMargin;
-      if ((clipped || recheck) && !verified(solution)) continue;
+      if ((lane(clipped, b) || recheck) && !verified(solution)) continue;
       solution.branch = b;
       solution.flags = branches.flags[b];
       if (!emit(solution)) return -1;

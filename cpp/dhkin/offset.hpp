@@ -162,9 +162,10 @@ struct ElbowSetup {
   V total{};  // angle about n of G plane_x from plane_x
 };
 
-template <class V>
+// `reach_side`: a double, or per lane (the branches of one pose in lanes, branch_lanes.hpp).
+template <class V, class R>
 DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
-                                       const TurnsT<V>& turns, V span, double reach_side,
+                                       const TurnsT<V>& turns, V span, R reach_side,
                                        double clamp) {
   const double L2 = g.upper_length, L3 = g.forearm_length;
   const double low = std::abs(L2 - L3), high = L2 + L3;

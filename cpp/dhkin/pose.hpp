@@ -65,43 +65,57 @@ inline PoseStatus pose_status(const double* T) {
   return kUsable;
 }
 
-// The rigid frame of a usable pose (4 x 4 row-major), its rotation block replaced by the nearest
-// rotation (Newton's iteration X <- (X + X^-T) / 2 for the polar factor); `moved` receives the
-// Frobenius norm of the change of the rotation block.
-inline Frame projected_frame(const double* T, double& moved) {
+// `raw` with its rotation block replaced by the nearest rotation (Newton's iteration
+// X <- (X + X^-T) / 2 for the polar factor, until a step changes nothing beyond rounding), in the
+// lanes where `active` holds (per lane for V = Lanes: each lane stops at its own step, as the
+// scalar loop would); `moved` receives the Frobenius norm of the change of the rotation block.
+template <class V>
+inline FrameT<V> projected_frame(const FrameT<V>& raw, MaskOf<V> active, V& moved) {
+  FrameT<V> out = raw;
+  for (int step = 0; step < kPolarSteps && any(active); ++step) {
+    const V a = out.R[0][0], b = out.R[0][1], c = out.R[0][2];
+    const V d = out.R[1][0], e = out.R[1][1], f = out.R[1][2];
+    const V g = out.R[2][0], h = out.R[2][1], i = out.R[2][2];
+    const V det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+    // X^-T = cofactor(X) / det
+    const V cofactor[3][3] = {{e * i - f * h, f * g - d * i, d * h - e * g},
+                              {c * h - b * i, a * i - c * g, b * g - a * h},
+                              {b * f - c * e, c * d - a * f, a * e - b * d}};
+    V change(0.0);
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) {
+        const V updated = 0.5 * (out.R[r][k] + cofactor[r][k] / det);
+        change = max(change, abs(updated - out.R[r][k]));
+        out.R[r][k] = select(active, updated, out.R[r][k]);
+      }
+    }
+    active = active && !(change <= 4e-16);
+  }
+  V total(0.0);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      const V d = out.R[r][c] - raw.R[r][c];
+      total += d * d;
+    }
+  }
+  moved = sqrt(total);
+  return out;
+}
+
+// The frame of a 4 x 4 row-major pose as it is (the top three rows).
+inline Frame raw_frame(const double* T) {
   Frame out;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) out.R[r][c] = T[4 * r + c];
     out.p[r] = T[4 * r + 3];
   }
-  for (int step = 0; step < kPolarSteps; ++step) {
-    const double a = out.R[0][0], b = out.R[0][1], c = out.R[0][2];
-    const double d = out.R[1][0], e = out.R[1][1], f = out.R[1][2];
-    const double g = out.R[2][0], h = out.R[2][1], i = out.R[2][2];
-    const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
-    // X^-T = cofactor(X) / det
-    const double cofactor[3][3] = {{e * i - f * h, f * g - d * i, d * h - e * g},
-                                   {c * h - b * i, a * i - c * g, b * g - a * h},
-                                   {b * f - c * e, c * d - a * f, a * e - b * d}};
-    double change = 0.0;
-    for (int r = 0; r < 3; ++r) {
-      for (int k = 0; k < 3; ++k) {
-        const double updated = 0.5 * (out.R[r][k] + cofactor[r][k] / det);
-        change = std::max(change, std::abs(updated - out.R[r][k]));
-        out.R[r][k] = updated;
-      }
-    }
-    if (change <= 4e-16) break;
-  }
-  double total = 0.0;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) {
-      const double d = out.R[r][c] - T[4 * r + c];
-      total += d * d;
-    }
-  }
-  moved = std::sqrt(total);
   return out;
+}
+
+// The rigid frame of a usable pose (4 x 4 row-major), its rotation block replaced by the nearest
+// rotation; `moved` receives the Frobenius norm of the change of the rotation block.
+inline Frame projected_frame(const double* T, double& moved) {
+  return projected_frame<double>(raw_frame(T), true, moved);
 }
 
 // How a call's targets become DH targets: T_dh = base^-1 T (tool tcp)^-1, and the TCP's origin

@@ -282,6 +282,29 @@ inline void set_lane(LaneBits& a, int l, int x) { a.v[l / simd::kNative][l % sim
 
 #undef DHKIN_PARTS
 
+// Lanes and masks with lane l taken from lane l ^ m (0 < m < kLanes): the pairs of lanes whose
+// indices differ by the bits of m swapped.
+DHKIN_INLINE Lanes swapped(const Lanes& a, int m) {
+#if defined(__AVX512F__)
+  const __m512i index = _mm512_xor_si512(_mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0),
+                                         _mm512_set1_epi64(m));
+  Lanes out;
+  // the masked form with every lane set (the plain one trips GCC 12's -Wmaybe-uninitialized)
+  out.v[0] = (simd::Doubles)_mm512_mask_permutexvar_pd((__m512d)a.v[0], 0xFF, index,
+                                                       (__m512d)a.v[0]);
+  return out;
+#else
+  Lanes out;
+  for (int l = 0; l < kLanes; ++l) out.set(l, a[l ^ m]);
+  return out;
+#endif
+}
+DHKIN_INLINE Mask swapped(const Mask& a, int m) {
+  Mask out;
+  for (int l = 0; l < kLanes; ++l) set_lane(out, l, lane(a, l ^ m));
+  return out;
+}
+
 // ---- the scalar lane type: double, bool and small integers ------------------------------------
 
 inline double select(bool m, double a, double b) { return m ? a : b; }

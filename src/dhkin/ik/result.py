@@ -75,6 +75,16 @@ class IKSolutions:
     ``configurations``, ``flags`` and ``residuals`` when they are first read.
     """
 
+    _q: NDArray[np.float64]
+    _configurations: tuple[Configuration, ...]
+    _flags: tuple[frozenset[str], ...]
+    _residuals: NDArray[np.float64]
+    _reason: str
+    _family: str
+    _numerical: bool
+    _projection: float
+    _dropped: int
+
     __slots__ = (
         "_answer",
         "_configurations",
@@ -95,14 +105,13 @@ class IKSolutions:
                  residuals: NDArray[np.float64] | None = None, reason: str = "",
                  family: str = "", numerical: bool = False, projection: float = 0.0,
                  dropped: int = 0) -> None:
-        self._q: NDArray[np.float64] | None = q
-        self._configurations: tuple[Configuration, ...] | None = configurations
-        self._flags: tuple[frozenset[str], ...] | None = flags
-        self._residuals: NDArray[np.float64] | None = (np.zeros((0, 2)) if residuals is None
-                                                       else residuals)
+        self._q = q
+        self._configurations = configurations
+        self._flags = flags
+        self._residuals = np.zeros((0, 2)) if residuals is None else residuals
         self._reason, self._family, self._numerical = reason, family, numerical
-        self._projection: float | None = projection  # None: read from _answer when asked for
-        self._dropped: int | None = dropped
+        self._projection = projection
+        self._dropped = dropped
         self._answer: Any = None
         self._configure: Callable[[int, tuple[int, ...]], Configuration] | None = None
 
@@ -110,46 +119,56 @@ class IKSolutions:
     def from_core(cls, answer: Any, family: str,
                   configure: Callable[[int, tuple[int, ...]], Configuration]) -> IKSolutions:
         """The solutions of the compiled core's ``Answer`` (dhkin._core), read when asked for;
-        ``configure(branch, turns)`` gives a solution's Configuration."""
-        result = cls.__new__(cls)
+        ``configure(branch, turns)`` gives a solution's Configuration.
+
+        Only the answer, the family and ``configure`` are stored: every other slot stays unset
+        until its property first reads it from the answer (a single call's result costs three
+        stores)."""
+        result = _new_solutions(cls)
         result._answer, result._configure, result._family = answer, configure, family
-        result._q = result._configurations = result._flags = result._residuals = None
-        result._reason, result._numerical = "", False
-        result._projection = result._dropped = None  # read from the answer when asked for
         return result
 
     @property
     def q(self) -> NDArray[np.float64]:
-        if self._q is None:
-            self._q = self._answer.q()
-        assert self._q is not None
-        return self._q
+        try:
+            return self._q
+        except AttributeError:
+            self._q = q = self._answer.q()
+            return q
 
     @property
     def configurations(self) -> tuple[Configuration, ...]:
-        if self._configurations is None:
-            assert self._configure is not None
+        try:
+            return self._configurations
+        except AttributeError:
             configure = self._configure
-            self._configurations = tuple(configure(branch, turns) for branch, turns
-                                         in self._answer.configuration_keys())
-        return self._configurations
+            assert configure is not None
+            self._configurations = configurations = tuple(
+                configure(branch, turns) for branch, turns in self._answer.configuration_keys())
+            return configurations
 
     @property
     def flags(self) -> tuple[frozenset[str], ...]:
-        if self._flags is None:
-            self._flags = tuple(FLAG_SETS[bits] for bits in self._answer.flags().tolist())
-        return self._flags
+        try:
+            return self._flags
+        except AttributeError:
+            self._flags = flags = tuple(FLAG_SETS[bits] for bits in self._answer.flags().tolist())
+            return flags
 
     @property
     def residuals(self) -> NDArray[np.float64]:
-        if self._residuals is None:
-            self._residuals = self._answer.residuals()
-        assert self._residuals is not None
-        return self._residuals
+        try:
+            return self._residuals
+        except AttributeError:
+            self._residuals = residuals = self._answer.residuals()
+            return residuals
 
     @property
     def reason(self) -> str:
-        return self._reason
+        try:
+            return self._reason
+        except AttributeError:  # a core answer with solutions
+            return ""
 
     @property
     def family(self) -> str:
@@ -157,23 +176,31 @@ class IKSolutions:
 
     @property
     def numerical(self) -> bool:
-        return self._numerical
+        try:
+            return self._numerical
+        except AttributeError:  # a core answer
+            return False
 
     @property
     def projection(self) -> float:
-        if self._projection is None:
-            self._projection = float(self._answer.projection)
-        return self._projection
+        try:
+            return self._projection
+        except AttributeError:
+            self._projection = projection = float(self._answer.projection)
+            return projection
 
     @property
     def dropped(self) -> int:
-        if self._dropped is None:
-            self._dropped = int(self._answer.dropped)
-        return self._dropped
+        try:
+            return self._dropped
+        except AttributeError:
+            self._dropped = dropped = int(self._answer.dropped)
+            return dropped
 
     def __len__(self) -> int:
-        if self._q is None:
-            return int(self._answer.count)
+        answer = self._answer
+        if answer is not None:
+            return answer.count
         return int(self._q.shape[0])
 
     def __iter__(self) -> Iterator[NDArray[np.float64]]:
@@ -198,6 +225,10 @@ class IKSolutions:
         if not self:
             return f"IKSolutions(0 solutions: {self.reason})"
         return f"IKSolutions({len(self)} solutions, family={self.family!r})"
+
+
+#: A new IKSolutions with no slot set (IKSolutions.from_core).
+_new_solutions = object.__new__
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,10 @@ from dhkin.transforms import invert
 DEFAULT_CHUNK = 65536
 
 
+#: solve_one's common call, looked up once.
+_INFINITY = math.inf
+_from_core = IKSolutions.from_core
+
 #: solve_chunks' default chunks hold at most this much output (bytes).
 STREAM_BYTES = 64 * 2**20
 
@@ -72,6 +76,8 @@ class ClosedFormSolver:
         self._base_inverse = invert(table.base)
         self.frames = self.frames_for(None)
         self.core = _core.ClosedForm(self.plan, self.frames)
+        self._solve_core = self.core.solve  # bound once: solve_one's common call
+        self._configure = self._configuration
         self._zero_seed = np.zeros(self.dof)
         self._configurations: dict[tuple[int, tuple[int, ...]], Configuration] = {}
         self._revolute = np.array([j.is_revolute for j in table.joints], dtype=float)
@@ -132,17 +138,17 @@ class ClosedFormSolver:
                   copies: bool = False) -> IKSolutions:
         """Every branch's solution of one pose (4, 4) (see the module docstring)."""
         if (tcp is None and (copies is False or copies is True) and type(tolerance) is float
-                and 0.0 < tolerance < math.inf):
+                and 0.0 < tolerance < _INFINITY):
             # the common call, straight to the core; anything it cannot take as it is (another
             # shape, a list, NaN) goes through the checked path below, which says what is wrong
             try:
-                answer = self.core.solve(T, q_seed, tolerance, None, copies)
+                answer = self._solve_core(T, q_seed, tolerance, None, copies)
             except TypeError:
                 answer = None
             if answer is not None:
                 found = answer.found  # solutions; -1: the pose or the seed was rejected
                 if found > 0:
-                    return IKSolutions.from_core(answer, self.family, self._configuration)
+                    return _from_core(answer, self.family, self._configure)
                 if found == 0:
                     return self._solutions(answer, tolerance)
         return self._solve_checked(T, q_seed, tolerance, tcp, copies)
@@ -176,7 +182,7 @@ class ClosedFormSolver:
                                reason=self._reason(answer.candidates, answer.verified,
                                                    answer.best_position, answer.best_rotation,
                                                    answer.why(), tolerance))
-        return IKSolutions.from_core(answer, self.family, self._configuration)
+        return _from_core(answer, self.family, self._configure)
 
     def _configuration(self, branch: int, turns: tuple[int, ...]) -> Configuration:
         """The (shared) Configuration of a branch and its turns."""

@@ -165,11 +165,8 @@ inline bool spherical_wrist_lanes(const SphericalGeometry& g, const Frame& T,
   const Mask arm_valid = ((back && arm.back_valid) || (!back && arm.front_valid)) && reachable &&
                          (!down || !merged);
   // wrist (spherical.hpp) with the wrist branch per lane
-  const SinCosT<Lanes> t23 = sincos(turn2 + turn3);
-  const Vec3T<Lanes> ra = rotate_about(g.lateral, t23.c, -t23.s, columns.first);
-  const Vec3T<Lanes> rb = rotate_about(g.lateral, t23.c, -t23.s, columns.last);
-  const Vec3T<Lanes> h0 = g.wrist_frame.transposed_times(ra);  // column 0 of H
-  const Vec3T<Lanes> h2 = g.wrist_frame.transposed_times(rb);  // column 2 of H
+  const WristColumns<Lanes> h = wrist_columns(g, columns, sincos(turn2 + turn3));
+  const Vec3T<Lanes> h0 = h.h0, h2 = h.h2;  // columns 0 and 2 of H
   const Lanes h00 = h0.x, h10 = h0.y, h20 = h0.z, h02 = h2.x, h12 = h2.y, h22 = h2.z;
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
   const Lanes sine = sqrt(h02 * h02 + h12 * h12);

@@ -110,6 +110,21 @@ DHKIN_INLINE TargetColumns<V> target_columns(const SphericalGeometry& g, const F
   return {rotate_about(g.up, t.c, -t.s, k0), rotate_about(g.up, t.c, -t.s, k2)};
 }
 
+// Columns 0 and 2 of H = F^T R23^T K1 (below) for an arm turned by turn23 (t23: its sine and
+// cosine) about `lateral`.
+template <class V>
+struct WristColumns {
+  Vec3T<V> h0, h2;
+};
+
+template <class V>
+DHKIN_INLINE WristColumns<V> wrist_columns(const SphericalGeometry& g,
+                                           const TargetColumns<V>& columns, const SinCosT<V>& t23) {
+  const Vec3T<V> a = rotate_about(g.lateral, t23.c, -t23.s, columns.first);
+  const Vec3T<V> b = rotate_about(g.lateral, t23.c, -t23.s, columns.last);
+  return {g.wrist_frame.transposed_times(a), g.wrist_frame.transposed_times(b)};
+}
+
 // q4, q5, q6 of both wrist branches.
 template <class V>
 struct WristRoots {
@@ -129,11 +144,8 @@ struct WristRoots {
 template <class V>
 DHKIN_INLINE WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns<V>& columns, V turn23,
                            const JointsT<V>& seed, const FamilyRequestT<V>& request) {
-  const SinCosT<V> t23 = sincos(turn23);
-  const Vec3T<V> a = rotate_about(g.lateral, t23.c, -t23.s, columns.first);
-  const Vec3T<V> b = rotate_about(g.lateral, t23.c, -t23.s, columns.last);
-  const Vec3T<V> h0 = g.wrist_frame.transposed_times(a);  // column 0 of H
-  const Vec3T<V> h2 = g.wrist_frame.transposed_times(b);  // column 2 of H
+  const WristColumns<V> h = wrist_columns(g, columns, sincos(turn23));
+  const Vec3T<V> h0 = h.h0, h2 = h.h2;  // columns 0 and 2 of H
   const V h00 = h0.x, h10 = h0.y, h20 = h0.z, h02 = h2.x, h12 = h2.y, h22 = h2.z;
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
   const V sine = sqrt(h02 * h02 + h12 * h12);

@@ -26,6 +26,27 @@ struct Solution {
   bool singular = false;
 };
 
+// Rows (anything with a `q`) kept in their order, but a row that `singular` marks is dropped
+// where it is one root with a row kept before it (one_root: their midpoint verifies).
+template <class Row, class Singular>
+void keep_distinct(const Chain& chain, const Frame& target, double tolerance,
+                   std::vector<Row>& rows, Singular singular) {
+  std::vector<Row> kept;
+  for (const Row& row : rows) {
+    bool merged = false;
+    if (singular(row)) {
+      for (const Row& other : kept) {
+        if (one_root(chain, target, row.q, other.q, tolerance)) {
+          merged = true;
+          break;
+        }
+      }
+    }
+    if (!merged) kept.push_back(row);
+  }
+  rows.swap(kept);
+}
+
 // Whether every joint of q has a 2pi copy within the limits widened by `slack`.
 inline bool has_copy(const Limits& limits, const Joints& q, double slack) {
   for (int j = 0; j < kDof; ++j) {
@@ -68,20 +89,8 @@ inline void seed_members(const Chain& chain, const Frame& target, const Joints& 
     root.q = q;
     root.error = error;
   }
-  std::vector<Root> kept;
-  for (const Root& root : roots) {
-    bool merged = false;
-    if (root.sigma <= band) {
-      for (const Root& other : kept) {
-        if (one_root(chain, target, root.q, other.q, tolerance)) {
-          merged = true;
-          break;
-        }
-      }
-    }
-    if (!merged) kept.push_back(root);
-  }
-  roots.swap(kept);
+  keep_distinct(chain, target, tolerance, roots,
+                [band](const Root& root) { return root.sigma <= band; });
 }
 
 // A row whose values were set onto limits (`held` marks them): the other joints refined with
@@ -137,20 +146,7 @@ inline void nearest_copies(const Chain& chain, const Frame& target, const std::v
     out.push_back(row);
   }
   // singular members set onto a limit may meet: one root
-  std::vector<Solution> distinct;
-  for (const Solution& row : out) {
-    bool merged = false;
-    if (row.singular) {
-      for (const Solution& other : distinct) {
-        if (one_root(chain, target, row.q, other.q, tolerance)) {
-          merged = true;
-          break;
-        }
-      }
-    }
-    if (!merged) distinct.push_back(row);
-  }
-  out.swap(distinct);
+  keep_distinct(chain, target, tolerance, out, [](const Solution& row) { return row.singular; });
 }
 
 // Every 2pi copy of each root within the limits widened by `slack` (joint 1 slowest), a value

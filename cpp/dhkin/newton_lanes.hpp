@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cmath>
+#include <utility>
 
 #include "dhkin/chain.hpp"
 #include "dhkin/family.hpp"
@@ -26,45 +27,62 @@ namespace newton {
 // fraction of the largest: least_squares' rank test (the scalar code then damps the step).
 constexpr double kRankFraction = 1e-15;
 
-// Solves J step = e per lane (J 6 x kDof row-major, square) by Householder QR; false in the lanes
-// where R fails the rank test (their `step` is then meaningless).
-DHKIN_INLINE Mask solve_square(const Lanes* J, const Lanes* e, Lanes* step) {
+// The Householder QR factorisation of a square Jacobian (6 x kDof) per lane: R above the
+// diagonal, R's diagonal in `diagonal`, the reflection vectors on and below it, each with its
+// squared length.
+struct SquareQR {
+  Lanes A[6][kDof];
+  Lanes diagonal[kDof];
+  Lanes v_norm[kDof];
+  Mask full_rank;  // R passes the rank test
+};
+
+// Factorises J (row-major) per lane.
+DHKIN_INLINE void factor_square(const Lanes* J, SquareQR& qr) {
   static_assert(kDof == 6, "a square system");
-  Lanes A[6][kDof], b[6];
   for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < kDof; ++c) A[r][c] = J[r * kDof + c];
-    b[r] = e[r];
+    for (int c = 0; c < kDof; ++c) qr.A[r][c] = J[r * kDof + c];
   }
   for (int k = 0; k < kDof; ++k) {  // Householder reflection of column k below the diagonal
-    Lanes squared = A[k][k] * A[k][k];
-    for (int r = k + 1; r < 6; ++r) squared += A[r][k] * A[r][k];
+    Lanes squared = qr.A[k][k] * qr.A[k][k];
+    for (int r = k + 1; r < 6; ++r) squared += qr.A[r][k] * qr.A[r][k];
     const Lanes length = sqrt(squared);
-    const Lanes alpha = select(A[k][k] >= 0.0, -length, length);
-    A[k][k] -= alpha;
-    Lanes v_norm = A[k][k] * A[k][k];
-    for (int r = k + 1; r < 6; ++r) v_norm += A[r][k] * A[r][k];
+    const Lanes alpha = select(qr.A[k][k] >= 0.0, -length, length);
+    qr.A[k][k] -= alpha;
+    Lanes v_norm = qr.A[k][k] * qr.A[k][k];
+    for (int r = k + 1; r < 6; ++r) v_norm += qr.A[r][k] * qr.A[r][k];
+    qr.v_norm[k] = v_norm;
     for (int c = k + 1; c < kDof; ++c) {
-      Lanes d = A[k][k] * A[k][c];
-      for (int r = k + 1; r < 6; ++r) d += A[r][k] * A[r][c];
+      Lanes d = qr.A[k][k] * qr.A[k][c];
+      for (int r = k + 1; r < 6; ++r) d += qr.A[r][k] * qr.A[r][c];
       const Lanes factor = 2.0 * d / v_norm;
-      for (int r = k; r < 6; ++r) A[r][c] -= factor * A[r][k];
+      for (int r = k; r < 6; ++r) qr.A[r][c] -= factor * qr.A[r][k];
     }
-    Lanes d = A[k][k] * b[k];
-    for (int r = k + 1; r < 6; ++r) d += A[r][k] * b[r];
-    const Lanes factor = 2.0 * d / v_norm;
-    for (int r = k; r < 6; ++r) b[r] -= factor * A[r][k];
-    A[k][k] = alpha;  // R's diagonal
+    qr.diagonal[k] = alpha;
   }
-  Lanes largest = abs(A[0][0]);
-  for (int k = 1; k < kDof; ++k) largest = max(largest, abs(A[k][k]));
-  Mask full_rank = uniform(true);
+  Lanes largest = abs(qr.diagonal[0]);
+  for (int k = 1; k < kDof; ++k) largest = max(largest, abs(qr.diagonal[k]));
+  qr.full_rank = uniform(true);
+  for (int k = 0; k < kDof; ++k) {
+    qr.full_rank = qr.full_rank && abs(qr.diagonal[k]) > kRankFraction * largest;
+  }
+}
+
+// Solves J step = e per lane from J's factorisation (meaningless where it is not full rank).
+DHKIN_INLINE void solve_square(const SquareQR& qr, const Lanes* e, Lanes* step) {
+  Lanes b[6];
+  for (int r = 0; r < 6; ++r) b[r] = e[r];
+  for (int k = 0; k < kDof; ++k) {
+    Lanes d = qr.A[k][k] * b[k];
+    for (int r = k + 1; r < 6; ++r) d += qr.A[r][k] * b[r];
+    const Lanes factor = 2.0 * d / qr.v_norm[k];
+    for (int r = k; r < 6; ++r) b[r] -= factor * qr.A[r][k];
+  }
   for (int k = kDof - 1; k >= 0; --k) {
-    full_rank = full_rank && abs(A[k][k]) > kRankFraction * largest;
     Lanes total = b[k];
-    for (int c = k + 1; c < kDof; ++c) total -= A[k][c] * step[c];
-    step[k] = total / A[k][k];
+    for (int c = k + 1; c < kDof; ++c) total -= qr.A[k][c] * step[c];
+    step[k] = total / qr.diagonal[k];
   }
-  return full_rank;
 }
 
 }  // namespace newton
@@ -81,70 +99,77 @@ struct LaneRefinement {
 // `active`; q ends as each lane's best iterate (inactive lanes are left as they are). Each
 // lane's steps are refine()'s until it stops improving; a lane whose step fails the rank test or
 // would be rejected (refine() would then damp it), or that has not settled after
-// newton::kMaxSteps steps, ends unsettled.
+// newton::kMaxSteps steps, ends unsettled. Once every running lane is polishing (both errors
+// below kRefineFraction * tolerance), the Jacobian of the last iterate that was not is kept: the
+// step from an error epsilon with a Jacobian computed delta away errs by ~delta epsilon, which at
+// epsilon <= 1e-12 is below rounding, as Newton's epsilon^2 is.
 inline LaneRefinement refine_lanes(const Chain& chain, const ChainShape& shape,
                                    const Frame& target, JointsT<Lanes>& q, Mask active,
                                    double tolerance) {
   using namespace newton;
   const double goal = kRefineFraction * tolerance;
-  FrameT<Lanes> frames[kDof + 1], trial_frames[kDof + 1];
+  // the current iterate and the trial, swapped when the trial is taken; a lane that stops never
+  // steps again, so only its best iterate is kept lane by lane
+  struct Iterate {
+    FrameT<Lanes> frames[kDof + 1];
+    Lanes e[6];
+    PoseErrorT<Lanes> error;
+    Lanes size;
+  };
+  Iterate buffers[2];
+  Iterate* now = &buffers[0];
+  Iterate* trial_at = &buffers[1];
   JointMotions<Lanes> motions;
-  Lanes e[6], trial_e[6], J[6 * kDof], step[kDof];
-  joint_motions(chain, q.data(), motions);
-  chain_frames(chain, shape, motions, frames);
-  PoseErrorT<Lanes> error = error_twist(frames[kDof], target, e);
-  Lanes size = error.position * error.position + error.rotation * error.rotation;
+  Lanes J[6 * kDof], step[kDof];
+  SquareQR qr;
+  const auto evaluate = [&](const JointsT<Lanes>& at, Iterate& out) {
+    joint_motions(chain, at.data(), motions);
+    chain_frames(chain, shape, motions, out.frames);
+    out.error = error_twist(out.frames[kDof], target, out.e);
+    out.size = out.error.position * out.error.position + out.error.rotation * out.error.rotation;
+  };
+  evaluate(q, *now);
   JointsT<Lanes> best = q;
-  PoseErrorT<Lanes> best_error = error;
-  Lanes best_size = size;
+  PoseErrorT<Lanes> best_error = now->error;
+  Lanes best_size = now->size;
   Mask polishing = uniform(false), settled = uniform(false), running = active;
+  bool factored = false;
   for (int iteration = 0; iteration < kMaxSteps && any(running); ++iteration) {
     // an exact root: nothing to improve
-    settled = settled || (running && size == 0.0);
-    running = running && !(size == 0.0);
-    polishing = polishing || (error.position <= goal && error.rotation <= goal);
-    jacobian(chain, frames, J);
-    const Mask solved = solve_square(J, e, step);
+    settled = settled || (running && now->size == 0.0);
+    running = running && !(now->size == 0.0);
+    polishing = polishing || (now->error.position <= goal && now->error.rotation <= goal);
+    if (!factored || any(running && !polishing)) {
+      jacobian(chain, now->frames, J);
+      factor_square(J, qr);
+      factored = true;
+    }
+    solve_square(qr, now->e, step);
     Lanes longest = abs(step[0]);
     for (int a = 1; a < kDof; ++a) longest = max(longest, abs(step[a]));
     const Lanes shrink = select(longest > kMaxJointStep, kMaxJointStep / longest, Lanes(1.0));
     JointsT<Lanes> trial;
     for (int a = 0; a < kDof; ++a) trial[a] = q[a] + shrink * step[a];
-    joint_motions(chain, trial.data(), motions);
-    chain_frames(chain, shape, motions, trial_frames);
-    const PoseErrorT<Lanes> trial_error = error_twist(trial_frames[kDof], target, trial_e);
-    const Lanes trial_size =
-        trial_error.position * trial_error.position + trial_error.rotation * trial_error.rotation;
-    const Mask taken = solved && trial_size <= (kGrowth * kGrowth) * size;
+    evaluate(trial, *trial_at);
+    const Lanes trial_size = trial_at->size;
+    const Mask taken = qr.full_rank && trial_size <= (kGrowth * kGrowth) * now->size;
     // at the rounding of the arithmetic: the lane stops, keeping the trial if it is the best
-    const Mask stop = running && taken && polishing && !(trial_size * kPolishGain <= size);
+    const Mask stop = running && taken && polishing && !(trial_size * kPolishGain <= now->size);
     const Mask kept = stop && trial_size < best_size;
     for (int a = 0; a < kDof; ++a) best[a] = select(kept, trial[a], best[a]);
-    best_error.position = select(kept, trial_error.position, best_error.position);
-    best_error.rotation = select(kept, trial_error.rotation, best_error.rotation);
+    best_error.position = select(kept, trial_at->error.position, best_error.position);
+    best_error.rotation = select(kept, trial_at->error.rotation, best_error.rotation);
     best_size = select(kept, trial_size, best_size);
     settled = settled || stop;
-    const Mask step_on = running && taken && !stop;
-    running = step_on;  // a rejected step ends the lane unsettled
-    if (!any(step_on)) break;
-    for (int a = 0; a < kDof; ++a) q[a] = select(step_on, trial[a], q[a]);
-    for (int r = 0; r < 6; ++r) e[r] = select(step_on, trial_e[r], e[r]);
-    for (int f = 0; f <= kDof; ++f) {
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          frames[f].R[r][c] = select(step_on, trial_frames[f].R[r][c], frames[f].R[r][c]);
-        }
-        frames[f].p[r] = select(step_on, trial_frames[f].p[r], frames[f].p[r]);
-      }
-    }
-    error.position = select(step_on, trial_error.position, error.position);
-    error.rotation = select(step_on, trial_error.rotation, error.rotation);
-    size = select(step_on, trial_size, size);
-    const Mask better = step_on && size < best_size;
+    running = running && taken && !stop;  // a rejected step ends the lane unsettled
+    if (!any(running)) break;
+    q = trial;
+    std::swap(now, trial_at);
+    const Mask better = running && now->size < best_size;
     for (int a = 0; a < kDof; ++a) best[a] = select(better, q[a], best[a]);
-    best_error.position = select(better, error.position, best_error.position);
-    best_error.rotation = select(better, error.rotation, best_error.rotation);
-    best_size = select(better, size, best_size);
+    best_error.position = select(better, now->error.position, best_error.position);
+    best_error.rotation = select(better, now->error.rotation, best_error.rotation);
+    best_size = select(better, now->size, best_size);
   }
   for (int a = 0; a < kDof; ++a) q[a] = select(active, best[a], q[a]);
   return {best_error, settled && active};

@@ -185,8 +185,9 @@ struct Root {
 // shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
 // probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
 // partner, both 5e-4 from singular near a singular root, was found no other way); those of the
-// moved pose are brought back (back_from_moved). Returns the starts that did not verify; the
-// roots' sigmas are smallest_singular with `band`.
+// moved pose are brought back (back_from_moved). Roots already in `roots` stay, and starts that
+// reach one of them add nothing. Returns the starts that did not verify; the roots' sigmas are
+// smallest_singular with `band`.
 inline int settle(const Chain& chain, const Frame& target, const std::vector<Start>& starts,
                   const Moves& moves, double tolerance, double lever, double band,
                   std::vector<Root>& roots) {
@@ -195,7 +196,8 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
   // there cluster near a singular point, and the moved poses' can collide in pairs
   bool moved_pose = false;
   for (const Start& start : starts) moved_pose = moved_pose || start.origin >= kMoved;
-  std::vector<bool> probe;
+  // roots already there (an earlier arrangement's) are not probed again
+  std::vector<bool> probe(roots.size(), false);
   int failed = 0;
   const auto known = [&](const Joints& q) {
     for (std::size_t other = 0; other < roots.size(); ++other) {

@@ -145,6 +145,20 @@ inline bool settle_on_limits(const Chain& chain, const Frame& target, const Limi
   return row.error.within(tolerance);
 }
 
+// Per joint the 2pi copy of q nearest `reference` within the limits themselves, into `out`;
+// false where a joint has none.
+inline bool copy_within(const Limits& limits, const Joints& q, const Joints& reference,
+                        Joints& out) {
+  for (int j = 0; j < kDof; ++j) {
+    double value = q[j] + kTwoPi * std::nearbyint((reference[j] - q[j]) / kTwoPi);
+    if (value < limits[j].lower) value += kTwoPi * std::ceil((limits[j].lower - value) / kTwoPi);
+    if (value > limits[j].upper) value -= kTwoPi * std::ceil((value - limits[j].upper) / kTwoPi);
+    if (!(value >= limits[j].lower && value <= limits[j].upper)) return false;
+    out[j] = value;
+  }
+  return true;
+}
+
 // Per root, per joint its 2pi copy nearest `reference` within the limits widened by `slack` (a
 // singular root's by the band: it lies anywhere in a cloud of near-solutions that wide), set onto
 // the limit where outside it and verified again; roots without such a copy, or that no longer
@@ -171,7 +185,12 @@ inline void nearest_copies(const Chain& chain, const Frame& target, const std::v
     }
     if (!inside) continue;
     if (moved && !settle_on_limits(chain, target, limits, held, tolerance, lever, row, true)) {
-      continue;
+      // set onto a limit it no longer verifies (a singular root's held joints can leave Newton
+      // no way back): its copy strictly within the limits, where it has one, verifies as the
+      // root does (the HC10's straight-up arm at q1 = q4 = 180 deg, the root 4e-8 beyond)
+      if (!copy_within(limits, root.q, reference, row.q)) continue;
+      row.error = check(chain, row.q.data(), target);
+      if (!row.error.within(tolerance)) continue;
     }
     out.push_back(row);
   }

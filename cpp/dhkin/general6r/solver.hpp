@@ -12,6 +12,7 @@
 #include "dhkin/general6r/answer.hpp"
 #include "dhkin/general6r/candidates.hpp"
 #include "dhkin/general6r/roots.hpp"
+#include "dhkin/general6r/valley.hpp"
 #include "dhkin/pose.hpp"
 
 namespace dhkin::general6r {
@@ -125,7 +126,9 @@ inline bool any_singular(const std::vector<Root>& roots, double band) {
 // takes the same value (as at special angles: the HC10's straight-up arm q2 = q3 = 0, a curve
 // q1 + q4 fixed, and an isolated root with q2 = 0) falls into that scattered cluster and is
 // lost. Every other regular arrangement eliminates another joint, where the two differ: their
-// starts are settled too (with their own moved pose where their eigenproblem asks for it).
+// starts are settled too (with their own moved pose where their eigenproblem asks for it). And
+// where the pose lies a hair from one with a curve of solutions, the roots left of that curve
+// are found along the valleys of those found (valley.hpp).
 inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh,
                          const Frame& tip_target, double verification, std::vector<Root>& roots) {
   const double band = singular_band(verification);
@@ -134,13 +137,14 @@ inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh
   all_candidates(solver.elimination, solver.moves, T_dh, starts);
   int failed = settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever, band,
                       roots);
-  if (solver.others.empty() || !any_singular(roots, band)) return failed;
+  if (!any_singular(roots, band)) return failed;
   for (const Elimination& other : solver.others) {
     starts.clear();
     all_candidates(other, solver.moves, T_dh, starts, false);
     failed += settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever, band,
                      roots);
   }
+  valley_roots(tip.chain, tip_target, verification, tip.lever, band, roots);
   return failed;
 }
 

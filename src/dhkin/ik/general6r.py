@@ -21,8 +21,8 @@ TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
 from __future__ import annotations
 
 import math
-from types import MappingProxyType
 from collections.abc import Sequence
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np

@@ -8,8 +8,8 @@ Poses T_dh are DH frame 0 -> DH frame 6 of the exact chain, metres; angles in ra
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np

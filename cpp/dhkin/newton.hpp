@@ -30,17 +30,6 @@ constexpr int kBudget = 4 * kMaxSteps;
 // Largest change of one joint per step (rad or m): near a singularity a full Gauss-Newton step
 // can jump to another branch.
 constexpr double kMaxJointStep = 0.3;
-// A chase (the refinement of a long shot or of a corrected-target retry: a start the ideal model
-// could not solve) stops after this many steps in a row that do not improve its best iterate:
-// steps of kMaxJointStep can by then have carried a joint half a turn (pi) from the best point,
-// so the iterates have left that candidate's branch (a root they still reach belongs to another
-// branch). Measured on 3000 random poses each of ur5e_calibrated, tm5_900 and
-// kinova_gen3_6dof: chases that verified never went more than 9 steps without improving, while
-// failing ones spent their whole budget (30 steps) on none.
-constexpr int kStallSteps = 11;  // ceil(pi / kMaxJointStep)
-static_assert(kStallSteps * kMaxJointStep >= kPi &&
-                  (kStallSteps - 1) * kMaxJointStep < kPi,
-              "kStallSteps = ceil(pi / kMaxJointStep)");
 // A step is taken when it leaves the error below this multiple of the current one. Newton's
 // iterates may first grow before they converge (from a start millimetres away, and near a
 // singular root, where the first full step overshoots by orders of magnitude and convergence is
@@ -125,7 +114,6 @@ struct Settings {
   int budget = kBudget;       // chain evaluations
   double growth = kGrowth;    // kGrowth: Newton; kMonotone: a monotone descent
   double damping_start = 0.0;
-  bool chase = false;         // stop after kStallSteps steps that do not improve the best iterate
 };
 
 }  // namespace newton
@@ -140,8 +128,8 @@ struct Settings {
 // is solved again; `damping_start` damps the first steps. Converged when both errors are below
 // kRefineFraction * tolerance; it then polishes until a step no longer shrinks the squared error
 // kPolishGain-fold (the limit of the arithmetic: the tolerance decides what is returned, not how
-// well it is solved). Stops there, after kMaxSteps, after `budget` evaluations of the chain, when
-// lambda passes kDampingLimit, or (a `chase`) after kStallSteps steps without a better iterate.
+// well it is solved). Stops there, after kMaxSteps, after `budget` evaluations of the chain, or
+// when lambda passes kDampingLimit.
 inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, const JointMask& fixed,
                         double tolerance, const newton::Settings& settings = {}) {
   using namespace newton;
@@ -164,7 +152,6 @@ inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, cons
   PoseError trial_error;
   double trial_size = 0.0;
   bool polishing = false;  // converged: steps go on while each shrinks the error kPolishGain-fold
-  int stalled = 0;         // steps since the best iterate last improved
   for (int iteration = 0; iteration < kMaxSteps; ++iteration) {
     if (evaluations >= settings.budget || size == 0.0) break;
     if (error.position <= goal && error.rotation <= goal) polishing = true;
@@ -203,9 +190,6 @@ inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, cons
       best_error = error;
       best_size = size;
       best = q;
-      stalled = 0;
-    } else if (settings.chase && ++stalled >= kStallSteps) {
-      break;  // the iterates have left the candidate's branch
     }
   }
   q = best;

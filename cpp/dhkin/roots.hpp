@@ -296,8 +296,7 @@ inline void retry_corrected(const Plan& plan, const Frame& T_dh, const Frame& T_
       if (!finite(candidates.q[b])) break;
       start = candidates.q[b];
       Joints trial = start;
-      refine(plan.chain, T_at, trial, JointMask{}, tolerance,
-             {newton::kBudget, newton::kGrowth, 0.0, true});  // a chase
+      refine(plan.chain, T_at, trial, JointMask{}, tolerance);
       if (check(plan.chain, trial.data(), T_at).within(tolerance)) {
         if (!branches.known(plan, trial)) {
           plan.wrap_revolute(trial);

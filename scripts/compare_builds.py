@@ -6,7 +6,8 @@
     /path/to/B/python scripts/compare_builds.py solve poses.npz b.npz   # from B's checkout
     python scripts/compare_builds.py compare a.npz b.npz
 
-Poses: 10^4 per robot (default: ur5, abb_irb1200_7_70, stanford_arm, ur5e_calibrated) drawn within the limits (seed 25; 500 with q5 = 0, 200 with q3 = 0),
+Poses: 10^4 per robot (default: ur5, abb_irb1200_7_70, stanford_arm, ur5e_calibrated) drawn
+within the limits (seed 25; 500 with q5 = 0, 200 with q3 = 0),
 tool0 poses by Pinocchio FK, and a random seed per pose. Solved: ``ik_batch_detailed`` with
 copies False and True, unseeded and seeded, workers=1, and ``ik`` on the first 300 poses.
 The comparison prints, per robot, whether every array is bit-identical, else whether the

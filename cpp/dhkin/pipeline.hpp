@@ -41,14 +41,11 @@
 
 namespace dhkin {
 
-// Steps 1-3 for one pose (any pose): the branches' verified principal solutions and the pose's
-// info.
-inline void solve_branches(const Plan& plan, const TargetFrames& frames, const double* T,
-                           const Joints& seed, double tolerance, Branches& branches,
-                           PoseInfo& info) {
-  if (plan.refine && direct_refined_branches(plan, frames, T, seed, tolerance, branches, info)) {
-    return;
-  }
+// Steps 1-3 for one pose (any pose) by the pipeline itself: the branches' verified principal
+// solutions and the pose's info.
+inline void pipeline_branches(const Plan& plan, const TargetFrames& frames, const double* T,
+                              const Joints& seed, double tolerance, Branches& branches,
+                              PoseInfo& info) {
   tolerance = plan.verification_tolerance(tolerance);
   PoseTargets targets;
   if (!begin_pose(frames, T, seed, info, branches, targets)) return;
@@ -253,6 +250,17 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
     }
   }
   info.best_position = best_position, info.best_rotation = best_rotation;
+}
+
+// Steps 1-3 for one pose (any pose): on a refined table the refined direct path, else the
+// pipeline.
+inline void solve_branches(const Plan& plan, const TargetFrames& frames, const double* T,
+                           const Joints& seed, double tolerance, Branches& branches,
+                           PoseInfo& info) {
+  if (plan.refine && direct_refined_branches(plan, frames, T, seed, tolerance, branches, info)) {
+    return;
+  }
+  pipeline_branches(plan, frames, T, seed, tolerance, branches, info);
 }
 
 // Steps 1-3 for one pose: the direct path, else the pipeline.

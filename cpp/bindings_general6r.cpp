@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "dhkin/general6r/reference.hpp"
+#include "dhkin/general6r/spurious.hpp"
 #include "dhkin/general6r/solver.hpp"
 
 namespace nb = nanobind;
@@ -98,6 +99,7 @@ g6::Solver solver_from(const nb::dict& f) {
   el.band = field(f, "band", 1)[0];
   el.direction = joints_of(field(f, "direction", kDof));
   el.offset = joints_of(field(f, "offset", kDof));
+  el.deflation = g6::spurious_deflation(el);
   const auto twist = field(f, "twist", 6);
   for (int i = 0; i < 6; ++i) s.moves.twist[i] = twist[i];
   const auto fallback = field(f, "fallback");

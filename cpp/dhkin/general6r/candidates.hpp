@@ -107,12 +107,18 @@ struct Angle {
 
 // The starts of every root the eigenproblem of T_dh (DH frame 0 -> DH frame 6 of the exact
 // chain) holds, appended to `out`; none where the leading matrix is ill-conditioned unless
-// `solve_ill` (QZ on the pencil then). Near-real eigenvalues (angle's imaginary part within the
-// band) whose angles lie within kCluster of each other are one cluster of m: at each distinct
-// member the m-dimensional null space of M is split into one monomial vector per root (m = 1:
-// inverse iteration), and each vector's joints are back-substituted.
+// `solve_ill` (QZ on the pencil then). A `moved` pose (all_candidates) is solved by QZ whatever
+// its leading matrix's condition: it lies within the move of a pose whose matrix polynomial is
+// singular, or nearly, so the companion's A^-1 (reciprocal condition 1.4e-7 on a tilted-UR5
+// special pose) amplifies rounding into its eigenvalues (1e-4 apart between two QR codes there,
+// two roots' eigenvalues 1.8e-3 apart: one's null vector came out a mixture, its start 0.4 rad
+// off, and which root was lost depended on rounding), while QZ stays backward stable (that
+// start: 1e-3 rad off, the size of the move). Near-real eigenvalues (angle's imaginary part
+// within the band) whose angles lie within kCluster of each other are one cluster of m: at each
+// distinct member the m-dimensional null space of M is split into one monomial vector per root
+// (m = 1: inverse iteration), and each vector's joints are back-substituted.
 inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool solve_ill,
-                                  std::vector<Start>& out) {
+                                  std::vector<Start>& out, bool moved = false) {
   using namespace candidates_detail;
   EliminationInfo info;
   const Frame target = el.reversed ? inverse(T_dh) : T_dh;
@@ -167,12 +173,9 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   const Matrix12 B = stacked(2.0 * (Ps * cs - Pc * sn) * el.half2);
   const Matrix12 C = M_at(lead);
   Eigenvalues eigenvalues;
-  if (best >= kLeadCondition) {
-    Matrix24 companion = Matrix24::Zero();
-    companion.topRightCorner<kMonomials, kMonomials>().setIdentity();
-    companion.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
-    companion.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
-    if (!matrix_eigenvalues(companion, eigenvalues)) return info;
+  int count = kEigenvalues;
+  if (best >= kLeadCondition && !moved) {
+    if (!companion_eigenvalues(el.deflation, A_inverse, B, C, eigenvalues, count)) return info;
   } else {
     if (!solve_ill) return info;
     Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();
@@ -185,7 +188,7 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   // near-real eigenvalues as angles, sorted by the real part
   std::array<Angle, kEigenvalues> angles;
   int kept = 0;
-  for (int index = 0; index < kEigenvalues; ++index) {
+  for (int index = 0; index < count; ++index) {
     const std::complex<double> x = eigenvalues(index);
     const std::complex<double> angle =
         std::abs(x) > kInfinite ? std::complex<double>(kPi, 0.0) : 2.0 * std::atan(x);
@@ -231,7 +234,7 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
 // candidates() of T_dh; where its eigenproblem is ill-conditioned (the matrix polynomial is
 // singular, or nearly, at this pose) instead, and where an eigenvalue is degenerate (a curve of
 // solutions at one value of the eliminated joint) as well, those of the pose moved by
-// moves.motion(1), whose eigenproblem is regular (solved by QZ where still ill-conditioned) with
+// moves.motion(1), whose eigenproblem is regular (solved by QZ, backward stable) with
 // simple eigenvalues: every real root of the moved pose is among its eigenvalues, and every
 // regular root of T_dh lies near one of them (docs/general6r.md, "Every root"). With the moved
 // pose, the fallback starts are starts too: near a highly degenerate singular set (a stretched
@@ -243,7 +246,7 @@ inline bool all_candidates(const Elimination& el, const Moves& moves, const Fram
   if (std::isnan(info.lead_condition)) return false;
   if (info.lead_condition >= kLeadCondition && !info.degenerate) return false;
   const std::size_t first = out.size();
-  candidates(el, moves.motion(1.0) * T_dh, true, out);
+  candidates(el, moves.motion(1.0) * T_dh, true, out, true);
   for (std::size_t i = first; i < out.size(); ++i) out[i].origin |= kMoved;
   for (const Joints& q : moves.fallback) out.push_back({q, 0});
   return true;

@@ -24,6 +24,7 @@
 #include "dhkin/general6r/eigenvalues.hpp"
 #include "dhkin/general6r/elimination.hpp"
 #include "dhkin/general6r/null_space.hpp"
+#include "dhkin/general6r/right_side.hpp"
 
 namespace dhkin::general6r {
 
@@ -42,8 +43,6 @@ constexpr double kLeadCondition = 1e-8;
 constexpr double kCluster = 1e-3;
 // Beyond this size an eigenvalue is infinite (theta_k = lead + pi to the last bit).
 constexpr double kInfinite = 1e150;
-// Rows of Q whose singular value is below this fraction of the largest are its null space.
-constexpr double kRankFraction = 1e-10;
 
 // Where a start comes from (bits): a near-real complex pair of eigenvalues (its imaginary angle
 // beyond kCluster, within the band); a cluster of eigenvalues (its root's fold partner is
@@ -134,23 +133,8 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   Right right;
   right.Q = G.topRows<8>().transpose();
   right.r = G.row(8).transpose();
-  const Eigen::JacobiSVD<RightSide> svd(right.Q, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const auto& sv = svd.singularValues();
-  right.rank = 0;
-  for (int i = 0; i < 8; ++i) right.rank += sv(i) > sv(0) * kRankFraction ? 1 : 0;
-  right.pseudo_inverse.setZero();
-  for (int i = 0; i < right.rank; ++i) {
-    right.pseudo_inverse += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / sv(i);
-  }
-  // rows N with N Q = 0 eliminate the right side's products: six (a generic mix where more)
-  const int null_rows = kQuantities - right.rank;
-  Eigen::Matrix<double, 6, kQuantities> N;
-  const auto left_null = svd.matrixU().rightCols(null_rows).transpose();
-  if (null_rows > 6) {
-    N = el.mix.leftCols(null_rows) * left_null;
-  } else {
-    N = left_null;
-  }
+  EliminatingRows N;  // N Q = 0: they eliminate the right side's products
+  factor_right(el, right, N);
   const Rows6 Pc = N * el.P[0], Ps = N * el.P[1];
   Rows6 P1 = N * el.P[2];
   P1.col(8) -= N * right.r;

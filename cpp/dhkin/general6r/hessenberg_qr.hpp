@@ -104,6 +104,29 @@ inline Reflector reflector(double x0, double x1, double x2) {
   return out;
 }
 
+// The reflector r (on rows and columns k .. k + 2, or k .. k + 1 without `Three`) applied to H
+// from both sides within the window [low, high]: from the left on columns k .. high, from the
+// right on rows low .. min(k + 3, high) (the eigenvalues alone need no more).
+template <bool Three>
+void apply_reflector(Matrix24& H, const Reflector& r, int k, int low, int high) {
+  const double t1 = r.tau, t2 = r.tau * r.v1, t3 = r.tau * r.v2;
+  for (int j = k; j <= high; ++j) {
+    double sum = H(k, j) + r.v1 * H(k + 1, j);
+    if (Three) sum += r.v2 * H(k + 2, j);
+    H(k, j) -= sum * t1;
+    H(k + 1, j) -= sum * t2;
+    if (Three) H(k + 2, j) -= sum * t3;
+  }
+  const int last = std::min(k + 3, high);
+  for (int i = low; i <= last; ++i) {
+    double sum = H(i, k) + r.v1 * H(i, k + 1);
+    if (Three) sum += r.v2 * H(i, k + 2);
+    H(i, k) -= sum * t1;
+    H(i, k + 1) -= sum * t2;
+    if (Three) H(i, k + 2) -= sum * t3;
+  }
+}
+
 }  // namespace hessenberg_qr_detail
 
 // H (its leading n x n block) reduced in place to upper Hessenberg form by Householder
@@ -247,23 +270,10 @@ inline bool hessenberg_eigenvalues(Matrix24& H, int n, Eigenvalues& out) {
         H(k, k - 1) *= 1.0 - r.tau;  // the reflector on the small entry above the bulge
       }
       if (r.tau == 0.0) continue;
-      const double t1 = r.tau, t2 = r.tau * r.v1, t3 = r.tau * r.v2;
-      // from the left: rows k .. k + 2, columns k .. high
-      for (int j = k; j <= high; ++j) {
-        double sum = H(k, j) + r.v1 * H(k + 1, j);
-        if (three) sum += r.v2 * H(k + 2, j);
-        H(k, j) -= sum * t1;
-        H(k + 1, j) -= sum * t2;
-        if (three) H(k + 2, j) -= sum * t3;
-      }
-      // from the right: columns k .. k + 2, rows low .. min(k + 3, high)
-      const int last = std::min(k + 3, high);
-      for (int i = low; i <= last; ++i) {
-        double sum = H(i, k) + r.v1 * H(i, k + 1);
-        if (three) sum += r.v2 * H(i, k + 2);
-        H(i, k) -= sum * t1;
-        H(i, k + 1) -= sum * t2;
-        if (three) H(i, k + 2) -= sum * t3;
+      if (three) {
+        apply_reflector<true>(H, r, k, low, high);
+      } else {
+        apply_reflector<false>(H, r, k, low, high);
       }
     }
   }

@@ -58,9 +58,9 @@ Joints joints_of(const std::vector<double>& v, std::size_t first = 0) {
   return q;
 }
 
-g6::Solver solver_from(const nb::dict& f) {
-  g6::Solver s;
-  g6::Elimination& el = s.elimination;
+// One arrangement's elimination from its named values.
+g6::Elimination elimination_from(const nb::dict& f) {
+  g6::Elimination el;
   const auto P = field(f, "P", 3 * g6::kQuantities * g6::kProducts);
   for (int c = 0; c < 3; ++c) {
     for (int q = 0; q < g6::kQuantities; ++q) {
@@ -100,6 +100,17 @@ g6::Solver solver_from(const nb::dict& f) {
   el.direction = joints_of(field(f, "direction", kDof));
   el.offset = joints_of(field(f, "offset", kDof));
   el.deflation = g6::spurious_deflation(el);
+  return el;
+}
+
+// The solver from its named values; `others`: the other regular arrangements' eliminations
+// (each a dict of elimination_from's values), solved where a root is singular.
+g6::Solver solver_from(const nb::dict& f, const nb::list& others) {
+  g6::Solver s;
+  s.elimination = elimination_from(f);
+  for (const nb::handle other : others) {
+    s.others.push_back(elimination_from(nb::cast<nb::dict>(other)));
+  }
   const auto twist = field(f, "twist", 6);
   for (int i = 0; i < 6; ++i) s.moves.twist[i] = twist[i];
   const auto fallback = field(f, "fallback");
@@ -154,7 +165,8 @@ nb::tuple rows_arrays(const std::vector<g6::Solution>& rows) {
 
 class General6R {
  public:
-  explicit General6R(const nb::dict& fields) : solver_(solver_from(fields)) {}
+  General6R(const nb::dict& fields, const nb::list& others)
+      : solver_(solver_from(fields, others)) {}
 
   // The tip at tool0, or at the TCP `tcp` (None: tool0).
   g6::Tip tip(const nb::object& tcp) const {
@@ -273,7 +285,7 @@ dhkin::Chain chain6(Input<double, nb::shape<kDof, 4, 4>> before,
 
 void bind_general6r(nb::module_& m) {
   nb::class_<General6R>(m, "General6R")
-      .def(nb::init<const nb::dict&>(), "fields"_a)
+      .def(nb::init<const nb::dict&, const nb::list&>(), "fields"_a, "others"_a)
       .def("candidates", &General6R::candidates, "T_dh"_a, "solve_ill"_a)
       .def("roots", &General6R::roots, "T_dh"_a, "tolerance"_a)
       .def("smallest_singular", &General6R::smallest_singular, "q"_a)

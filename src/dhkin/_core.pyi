@@ -71,7 +71,8 @@ class ClosedForm:
 
 # The general 6R solver (cpp/bindings_general6r.cpp, cpp/dhkin/general6r/).
 class General6R:
-    def __init__(self, fields: dict[str, NDArray[np.float64]]) -> None: ...
+    def __init__(self, fields: dict[str, NDArray[np.float64]],
+                 others: list[dict[str, NDArray[np.float64]]]) -> None: ...
     def candidates(self, T_dh: NDArray[np.float64], solve_ill: bool
                    ) -> tuple[NDArray[np.float64], NDArray[np.int64], float, bool]: ...
     def roots(self, T_dh: NDArray[np.float64], tolerance: float

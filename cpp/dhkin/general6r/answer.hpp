@@ -56,34 +56,64 @@ inline bool has_copy(const Limits& limits, const Joints& q, double slack) {
   return true;
 }
 
+// The point of the limits' box nearest q: per joint, its 2pi copy nearest [lower, upper],
+// clipped into it; `outside` (rad) how far q's copies lie from the box at most.
+inline Joints box_point(const Limits& limits, const Joints& q, double& outside) {
+  Joints out;
+  outside = 0.0;
+  for (int j = 0; j < kDof; ++j) {
+    const double centre = 0.5 * (limits[j].lower + limits[j].upper);
+    double value = q[j];
+    if (std::isfinite(centre)) value += kTwoPi * std::nearbyint((centre - q[j]) / kTwoPi);
+    const double inside = std::min(std::max(value, limits[j].lower), limits[j].upper);
+    outside = std::max(outside, std::abs(value - inside));
+    out[j] = inside;
+  }
+  return out;
+}
+
+// A member q (in place) with no 2pi copy within the limits widened by `margin`, walked towards
+// them: alternately to the box's point nearest it and back onto the solutions (von Neumann's
+// alternating projections, which reach a point of both where the curve of solutions crosses
+// into the box), while each pass brings it nearer the box by more than the tolerance. A folded
+// M-430iA/2P (q3 = 180 deg, links 2 and 3 equally long: q2 free) has members nearest q = 0 at
+// q5 = 180 deg or q2 = -180 deg, beyond its limits, and members within them.
+inline void walk_into_limits(const Chain& chain, const Frame& target, const Limits& limits,
+                             double margin, double tolerance, double lever, double band,
+                             Joints& q, PoseError& error) {
+  double outside = 0.0;
+  Joints goal = box_point(limits, q, outside);
+  while (!has_copy(limits, q, margin)) {
+    Joints moved = q;
+    PoseError moved_error = error;
+    const Projection projection = project(chain, target, goal, tolerance, lever, band);
+    nearest_member(chain, target, goal, projection, tolerance, lever, band, moved, moved_error);
+    double moved_outside = 0.0;
+    const Joints next_goal = box_point(limits, moved, moved_outside);
+    if (!(moved_outside < outside - tolerance)) return;
+    q = moved, error = moved_error, goal = next_goal, outside = moved_outside;
+  }
+}
+
 // The seed's choice where a joint is free, in place, as the families' seeded candidate (the
 // member of the solution family nearest the seed): each singular root (sigma within `band`)
-// moves along the solutions towards the seed (walk), and is replaced by the point damped Newton
-// reaches from the seed where that point is singular, nearer the seed, and tied to the root by a
-// segment of solutions (on_segment: a free pair of coincident axes, where walking stalls in the
-// cloud of near-solutions). The seed is never a root of its own. A root whose member has no 2pi
-// copy within the limits (widened to the band), where the root itself has, stays where it was.
-// A root that moved onto an earlier one (the merging rule) is dropped.
+// becomes its member nearest the seed (nearest_member). The seed is never a root of its own. A
+// member with no 2pi copy
+// within the limits (widened to the band) is walked into them (walk_into_limits); one that
+// still has none, where the root itself has, stays where the root was. A root that moved onto
+// an earlier one (the merging rule) is dropped.
 inline void seed_members(const Chain& chain, const Frame& target, const Joints& seed,
                          const Limits& limits, double slack, double tolerance, double lever,
                          double band, std::vector<Root>& roots) {
-  Joints projected;
-  PoseError projected_error;
-  const bool reached =
-      seed_projection(chain, target, seed, tolerance, lever, band, projected, projected_error);
-  const double distance_projected = squared_distance(projected, seed);
+  const Projection projection = project(chain, target, seed, tolerance, lever, band);
   const double margin = std::max(slack, band);
   for (Root& root : roots) {
     if (!(root.sigma <= band)) continue;
     Joints q = root.q;
     PoseError error = root.error;
-    walk(chain, target, q, seed, tolerance, lever, band, error);
-    if (reached && distance_projected < squared_distance(q, seed) &&
-        on_segment(chain, target, q, projected, tolerance, lever, band)) {
-      q = wrapped(projected);
-      error = projected_error;
-      // damped Newton stops near, not at, the member nearest the seed: walk the rest
-      walk(chain, target, q, seed, tolerance, lever, band, error);
+    nearest_member(chain, target, seed, projection, tolerance, lever, band, q, error);
+    if (!has_copy(limits, q, margin)) {
+      walk_into_limits(chain, target, limits, margin, tolerance, lever, band, q, error);
     }
     if (!has_copy(limits, q, margin) && has_copy(limits, root.q, margin)) continue;
     root.q = q;
@@ -115,6 +145,20 @@ inline bool settle_on_limits(const Chain& chain, const Frame& target, const Limi
   return row.error.within(tolerance);
 }
 
+// Per joint the 2pi copy of q nearest `reference` within the limits themselves, into `out`;
+// false where a joint has none.
+inline bool copy_within(const Limits& limits, const Joints& q, const Joints& reference,
+                        Joints& out) {
+  for (int j = 0; j < kDof; ++j) {
+    double value = q[j] + kTwoPi * std::nearbyint((reference[j] - q[j]) / kTwoPi);
+    if (value < limits[j].lower) value += kTwoPi * std::ceil((limits[j].lower - value) / kTwoPi);
+    if (value > limits[j].upper) value -= kTwoPi * std::ceil((value - limits[j].upper) / kTwoPi);
+    if (!(value >= limits[j].lower && value <= limits[j].upper)) return false;
+    out[j] = value;
+  }
+  return true;
+}
+
 // Per root, per joint its 2pi copy nearest `reference` within the limits widened by `slack` (a
 // singular root's by the band: it lies anywhere in a cloud of near-solutions that wide), set onto
 // the limit where outside it and verified again; roots without such a copy, or that no longer
@@ -141,7 +185,12 @@ inline void nearest_copies(const Chain& chain, const Frame& target, const std::v
     }
     if (!inside) continue;
     if (moved && !settle_on_limits(chain, target, limits, held, tolerance, lever, row, true)) {
-      continue;
+      // set onto a limit it no longer verifies (a singular root's held joints can leave Newton
+      // no way back): its copy strictly within the limits, where it has one, verifies as the
+      // root does (the HC10's straight-up arm at q1 = q4 = 180 deg, the root 4e-8 beyond)
+      if (!copy_within(limits, root.q, reference, row.q)) continue;
+      row.error = check(chain, row.q.data(), target);
+      if (!row.error.within(tolerance)) continue;
     }
     out.push_back(row);
   }

@@ -224,15 +224,18 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
 // pose, the fallback starts are starts too: near a highly degenerate singular set (a stretched
 // arm with a free wrist) a moved pose's own eigenproblem can lose the roots it has there.
 // Returns whether the moved pose was used (false also where T_dh's quantities are not finite).
+// `fallback` false leaves out the fixed starts (a second arrangement's: the first had them).
 inline bool all_candidates(const Elimination& el, const Moves& moves, const Frame& T_dh,
-                           std::vector<Start>& out) {
+                           std::vector<Start>& out, bool fallback = true) {
   const EliminationInfo info = candidates(el, T_dh, false, out);
   if (std::isnan(info.lead_condition)) return false;
   if (info.lead_condition >= kLeadCondition && !info.degenerate) return false;
   const std::size_t first = out.size();
   candidates(el, moves.motion(1.0) * T_dh, true, out, true);
   for (std::size_t i = first; i < out.size(); ++i) out[i].origin |= kMoved;
-  for (const Joints& q : moves.fallback) out.push_back({q, 0});
+  if (fallback) {
+    for (const Joints& q : moves.fallback) out.push_back({q, 0});
+  }
   return true;
 }
 

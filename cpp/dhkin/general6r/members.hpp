@@ -158,4 +158,37 @@ inline bool on_segment(const Chain& chain, const Frame& target, const Joints& a,
   return true;
 }
 
+// Where damped Newton from a point lands on the solutions (seed_projection), computed once per
+// point and shared by every root moved towards it.
+struct Projection {
+  bool reached = false;  // it verifies and is singular
+  Joints q{};
+  PoseError error;
+};
+
+inline Projection project(const Chain& chain, const Frame& target, const Joints& point,
+                          double tolerance, double lever, double band) {
+  Projection out;
+  out.reached = seed_projection(chain, target, point, tolerance, lever, band, out.q, out.error);
+  return out;
+}
+
+// The member of a singular root's solutions nearest `point` (the seed, or a point of the limits),
+// in place: q walked towards it, and replaced by the point's projection where that lies nearer
+// and a segment of solutions ties the two (on_segment: a free pair of coincident axes, where
+// walking stalls in the cloud of near-solutions), then walked the rest (damped Newton stops
+// near, not at, the member nearest the point). `point` is never a root of its own.
+inline void nearest_member(const Chain& chain, const Frame& target, const Joints& point,
+                           const Projection& projection, double tolerance, double lever,
+                           double band, Joints& q, PoseError& error) {
+  walk(chain, target, q, point, tolerance, lever, band, error);
+  if (projection.reached &&
+      squared_distance(projection.q, point) < squared_distance(q, point) &&
+      on_segment(chain, target, q, projection.q, tolerance, lever, band)) {
+    q = wrapped(projection.q);
+    error = projection.error;
+    walk(chain, target, q, point, tolerance, lever, band, error);
+  }
+}
+
 }  // namespace dhkin::general6r

@@ -149,26 +149,34 @@ inline PoseError back_from_moved(const Chain& chain, const Frame& target, Joints
   return {INFINITY, INFINITY};
 }
 
-// The fold partner of the root q, refined by Newton into `out`: along the Jacobian's weakest
-// right singular vector v (sigma, left vector u; linear rows over `lever`) the pose error is
-// ~ t sigma u + t^2 / 2 kappa u with kappa = u . d2F[v, v] (a central difference of the Jacobian
-// along v), zero again at t = -2 sigma / kappa. False where that lies beyond kMaxJointStep (no
-// fold partner near) or kappa vanishes.
-inline bool fold_partner(const Chain& chain, const Frame& target, const Joints& q, double lever,
-                         double goal, Joints& out) {
+// Where the fold partner of the root q lies along the Jacobian's weakest right singular vector
+// v (sigma, left vector u; linear rows over `lever`): the pose error is ~ t sigma u + t^2 / 2
+// kappa u with kappa = u . d2F[v, v] (a central difference of the Jacobian along v), zero again
+// at t = -2 sigma / kappa; that t, and v into `direction`. Infinite where kappa vanishes.
+inline double fold_step(const Chain& chain, const Joints& q, double lever,
+                        Eigen::Matrix<double, kDof, 1>& direction) {
   const Jacobian J = scaled_jacobian(chain, q, lever);
   const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const double sigma = svd.singularValues()(kDof - 1);
   const auto u = svd.matrixU().col(kDof - 1);
-  const auto v = svd.matrixV().col(kDof - 1);
+  direction = svd.matrixV().col(kDof - 1);
   double curvature = 0.0;
+  Joints near_q;
   for (const double sign : {1.0, -1.0}) {
-    for (int j = 0; j < kDof; ++j) out[j] = q[j] + sign * kProbeStep * v(j);
-    const Jacobian near = scaled_jacobian(chain, out, lever);
-    curvature += sign * u.dot(near * v) / (2.0 * kProbeStep);
+    for (int j = 0; j < kDof; ++j) near_q[j] = q[j] + sign * kProbeStep * direction(j);
+    const Jacobian near = scaled_jacobian(chain, near_q, lever);
+    curvature += sign * u.dot(near * direction) / (2.0 * kProbeStep);
   }
-  if (!(std::abs(curvature) > 0.0)) return false;
-  const double t = -2.0 * sigma / curvature;
+  if (!(std::abs(curvature) > 0.0)) return INFINITY;
+  return -2.0 * sigma / curvature;
+}
+
+// The fold partner of the root q (fold_step), refined by Newton into `out`; false where it lies
+// beyond kMaxJointStep (no fold partner near).
+inline bool fold_partner(const Chain& chain, const Frame& target, const Joints& q, double lever,
+                         double goal, Joints& out) {
+  Eigen::Matrix<double, kDof, 1> v;
+  const double t = fold_step(chain, q, lever, v);
   if (!(std::abs(t) <= newton::kMaxJointStep)) return false;
   for (int j = 0; j < kDof; ++j) out[j] = q[j] + t * v(j);
   refine(chain, target, out, JointMask{}, goal, {kBudget, newton::kGrowth, 0.0});
@@ -188,8 +196,9 @@ struct Root {
 // shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
 // probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
 // partner, both 5e-4 from singular near a singular root, was found no other way); those of the
-// moved pose are brought back (back_from_moved). Returns the starts that did not verify; the
-// roots' sigmas are smallest_singular with `band`.
+// moved pose are brought back (back_from_moved). Roots already in `roots` stay, and starts that
+// reach one of them add nothing. Returns the starts that did not verify; the roots' sigmas are
+// smallest_singular with `band`.
 inline int settle(const Chain& chain, const Frame& target, const std::vector<Start>& starts,
                   const Moves& moves, double tolerance, double lever, double band,
                   std::vector<Root>& roots) {
@@ -198,7 +207,8 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
   // there cluster near a singular point, and the moved poses' can collide in pairs
   bool moved_pose = false;
   for (const Start& start : starts) moved_pose = moved_pose || start.origin >= kMoved;
-  std::vector<bool> probe;
+  // roots already there (an earlier arrangement's) are not probed again
+  std::vector<bool> probe(roots.size(), false);
   int failed = 0;
   const auto known = [&](const Joints& q) {
     for (std::size_t other = 0; other < roots.size(); ++other) {

@@ -12,6 +12,7 @@
 #include "dhkin/general6r/answer.hpp"
 #include "dhkin/general6r/candidates.hpp"
 #include "dhkin/general6r/roots.hpp"
+#include "dhkin/general6r/valley.hpp"
 #include "dhkin/pose.hpp"
 
 namespace dhkin::general6r {
@@ -28,6 +29,9 @@ struct Tip {
 // A six-revolute table's solver: its elimination, moved poses, exact chain and limits.
 struct Solver {
   Elimination elimination;
+  // The table's other regular arrangements (each eliminates another joint), solved as well at
+  // a pose with a singular root (settled_roots).
+  std::vector<Elimination> others;
   Moves moves;
   Chain dh_chain;       // DH frame 0 -> DH frame 6, corrections included
   Frame tool;           // DH frame 6 -> tool0
@@ -105,15 +109,43 @@ struct Answer {
   std::vector<Solution> rows;
 };
 
+// Whether some root is singular (sigma within `band`).
+inline bool any_singular(const std::vector<Root>& roots, double band) {
+  for (const Root& root : roots) {
+    if (root.sigma <= band) return true;
+  }
+  return false;
+}
+
 // The roots of T_dh (DH frame 0 -> DH frame 6) verified on `tip`'s chain against `tip_target`
 // (DH frame 0 -> the tip) at the verification tolerance; returns the starts that failed.
+//
+// Where a root is singular, the eliminated joint's eigenvalue at it is a multiple one (a double
+// root, or a curve of solutions: a defective eigenvalue of high order whose computed copies
+// scatter by ~eps^(1 / order), up to 1e-2 rad), and a regular root whose eliminated joint
+// takes the same value (as at special angles: the HC10's straight-up arm q2 = q3 = 0, a curve
+// q1 + q4 fixed, and an isolated root with q2 = 0) falls into that scattered cluster and is
+// lost. Every other regular arrangement eliminates another joint, where the two differ: their
+// starts are settled too (with their own moved pose where their eigenproblem asks for it). And
+// where the pose lies a hair from one with a curve of solutions, the roots left of that curve
+// are found along the valleys of those found (valley.hpp).
 inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh,
                          const Frame& tip_target, double verification, std::vector<Root>& roots) {
+  const double band = singular_band(verification);
   std::vector<Start> starts;
   starts.reserve(64);
   all_candidates(solver.elimination, solver.moves, T_dh, starts);
-  return settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever,
-                singular_band(verification), roots);
+  int failed = settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever, band,
+                      roots);
+  if (!any_singular(roots, band)) return failed;
+  for (const Elimination& other : solver.others) {
+    starts.clear();
+    all_candidates(other, solver.moves, T_dh, starts, false);
+    failed += settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever, band,
+                     roots);
+  }
+  valley_roots(tip.chain, tip_target, verification, tip.lever, band, roots);
+  return failed;
 }
 
 // Every solution of the pose T (4 x 4 row-major) within the joint limits: per root its in-limit

@@ -21,6 +21,7 @@ TCP, ``tcp``: tool0 -> TCP) in metres; joint values are URDF joint values (rad).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from types import MappingProxyType
 from typing import Any
 
@@ -33,8 +34,8 @@ from dhkin.errors import FamilyError, InputError
 from dhkin.ik.general6r_arrangement import (
     IMAGINARY_BAND,
     Arrangement,
-    choose_arrangement,
     frames_at_zero,
+    rank_arrangements,
 )
 from dhkin.ik.general6r_elimination import _HALF2, _V_INV, Elimination
 from dhkin.ik.general6r_model import Model, _inverse, refit
@@ -66,6 +67,12 @@ def singular_band(tolerance: float) -> float:
     return math.sqrt(tolerance)
 
 
+def _fields(values: dict[str, Any]) -> dict[str, NDArray[np.float64]]:
+    """Named values as the compiled solver takes them: flat C-contiguous float64 arrays."""
+    return {name: np.ascontiguousarray(value, dtype=np.float64).ravel()
+            for name, value in values.items()}
+
+
 class General6RSolver:
     """Every solution of a six-revolute table (see the module docstring)."""
 
@@ -93,38 +100,47 @@ class General6RSolver:
         #: from DH frame 0 (a farther pose is out of reach before any elimination).
         self.links = float(sum(np.linalg.norm(pre[j, :3, 3]) for j in range(7)))
         self.fallback = fallback_starts(table.lower, table.upper)
-        if arrangement is None:
-            arrangement = choose_arrangement(self)
-        self.arrangement = arrangement
-        self.model, self.elimination = self._eliminator(arrangement)
+        ranked = [arrangement] if arrangement is not None else rank_arrangements(self)
+        self.arrangement = ranked[0]
+        #: The other regular arrangements, solved too at a pose with a singular root.
+        self.other_arrangements = tuple(ranked[1:])
+        self.model, self.elimination = self._eliminator(self.arrangement)
+        others = [(other, self._eliminator(other)[1]) for other in self.other_arrangements]
         #: The compiled solver (cpp/dhkin/general6r/): every pose's work.
-        self.core = self.core_for(arrangement, self.elimination)
+        self.core = self.core_for(self.arrangement, self.elimination, others)
         self._configurations: dict[tuple[int, ...], Configuration] = {}
         self.branch_labels: tuple[MappingProxyType[str, str], ...] = (MappingProxyType({}),)
         self._zero_seed = np.zeros(6)
 
-    def core_for(self, arrangement: Arrangement, elimination: Elimination) -> Any:
+    def core_for(self, arrangement: Arrangement, elimination: Elimination,
+                 others: Sequence[tuple[Arrangement, Elimination]] = ()) -> Any:
         """The compiled solver (``dhkin._core.General6R``) of one arrangement: the elimination's
-        constants, the moved poses, the exact chain and limits, by name."""
+        constants, the moved poses, the exact chain and limits, by name; ``others``: the
+        arrangements also solved at a pose with a singular root."""
+        values: dict[str, Any] = self._elimination_values(arrangement, elimination)
+        values.update({
+            "twist": moves(elimination.model.scale)[0], "fallback": self.fallback,
+            "chain_before": self.parts["before"], "chain_direction": self.direction,
+            "chain_offset": self.offset, "chain_tail": self.parts["tail"],
+            "tool": self.table.tool, "base_inverse": _inverse(self.table.base),
+            "lower": self.table.lower, "upper": self.table.upper, "lever": self.lever,
+            "links": self.links})
+        other_values = [_fields(self._elimination_values(*other)) for other in others]
+        return _core.General6R(_fields(values), other_values)
+
+    def _elimination_values(self, arrangement: Arrangement, elimination: Elimination
+                            ) -> dict[str, Any]:
+        """One arrangement's elimination constants, by name (cpp/bindings_general6r.cpp)."""
         model = elimination.model
         before, after = elimination.sample_factors()
-        values: dict[str, Any] = {
+        return {
             "P": elimination.P, "before": before, "after": after,
             "right_inverse": np.kron(_V_INV, _V_INV), "mix": elimination.mix, "half2": _HALF2,
             "rows": np.array(elimination.rows), "phi": model.phi,
             "D0_inverse": _inverse(model.D0), "E_inverse": _inverse(model.E),
             "shift": elimination.shift, "k": elimination.k,
             "reversed": float(arrangement.reversed), "scale": model.scale,
-            "band": IMAGINARY_BAND, "direction": self.direction, "offset": self.offset,
-            "twist": moves(model.scale)[0], "fallback": self.fallback,
-            "chain_before": self.parts["before"], "chain_direction": self.direction,
-            "chain_offset": self.offset, "chain_tail": self.parts["tail"],
-            "tool": self.table.tool, "base_inverse": _inverse(self.table.base),
-            "lower": self.table.lower, "upper": self.table.upper, "lever": self.lever,
-            "links": self.links}
-        fields = {name: np.ascontiguousarray(value, dtype=np.float64).ravel()
-                  for name, value in values.items()}
-        return _core.General6R(fields)
+            "band": IMAGINARY_BAND, "direction": self.direction, "offset": self.offset}
 
     def compiled_candidates(self, T_dh: NDArray[np.float64], core: Any = None
                             ) -> NDArray[np.float64]:

@@ -8,6 +8,7 @@ Poses T_dh are DH frame 0 -> DH frame 6 of the exact chain, metres; angles in ra
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -33,7 +34,8 @@ class EliminatingSolver(Protocol):
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]: ...
 
-    def core_for(self, arrangement: Arrangement, elimination: Elimination) -> Any: ...
+    def core_for(self, arrangement: Arrangement, elimination: Elimination,
+                 others: Sequence[tuple[Arrangement, Elimination]] = ()) -> Any: ...
 
     def compiled_candidates(self, T_dh: NDArray[np.float64], core: Any = None
                             ) -> NDArray[np.float64]: ...
@@ -80,19 +82,20 @@ def wrap(q: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(-((-q + math.pi) % TWO_PI - math.pi))
 
 
-def choose_arrangement(solver: EliminatingSolver, poses: int = 12) -> Arrangement:
-    """The arrangement whose matrix polynomial is regular and which recovers the most sample
-    solutions (joint vectors drawn with a fixed seed; FK gives their poses) on the exact chain,
-    ties broken by the fewest starts (eigenvalues shared by several roots give a start per
-    root and cost a split: on the CRX-10iA every eigenvalue of the reversed k = 1 arrangement
-    is shared by two roots, none of the forward one's), then by the polynomial's
-    conditioning."""
+def rank_arrangements(solver: EliminatingSolver, poses: int = 12) -> list[Arrangement]:
+    """The arrangements whose matrix polynomial is regular, best first: the one that recovers the
+    most sample solutions (joint vectors drawn with a fixed seed; FK gives their poses) on the
+    exact chain, ties broken by the fewest starts (eigenvalues shared by several roots give a
+    start per root and cost a split: on the CRX-10iA every eigenvalue of the reversed k = 1
+    arrangement is shared by two roots, none of the forward one's), then by the polynomial's
+    conditioning. The first solves every pose; the others, which eliminate other joints, solve
+    the poses where a root is singular as well (``settled_roots``,
+    cpp/dhkin/general6r/solver.hpp)."""
     rng = np.random.default_rng(16)
     samples = rng.uniform(-math.pi, math.pi, size=(poses, 6))
     targets = [_inverse(solver.table.base) @ solver.table.fk(q) @ _inverse(solver.table.tool)
                for q in samples]
-    best: tuple[float, float, float] | None = None
-    choice: Arrangement | None = None
+    scored: list[tuple[tuple[float, float, float], int, Arrangement]] = []
     for reversed_ in (False, True):
         for k in (1, 2, 0):
             arrangement = Arrangement(reversed_, k)
@@ -107,13 +110,18 @@ def choose_arrangement(solver: EliminatingSolver, poses: int = 12) -> Arrangemen
                 starts += cands.shape[0]
                 if cands.shape[0] and np.min(np.max(np.abs(wrap(cands - q)), axis=1)) < 1e-6:
                     recovered += 1
-            score = (recovered, -starts, regular)
-            if best is None or score > best:
-                best, choice = score, arrangement
-    if choice is None:
+            scored.append(((recovered, -starts, regular), -len(scored), arrangement))
+    if not scored:
         raise FamilyError(f"{solver.table.name}: every elimination's matrix polynomial is "
                           "singular")
-    return choice
+    # best score first; among equal scores the earlier tried (-len(scored) keeps their order)
+    return [arrangement for _, _, arrangement in sorted(scored, key=lambda s: s[:2],
+                                                          reverse=True)]
+
+
+def choose_arrangement(solver: EliminatingSolver, poses: int = 12) -> Arrangement:
+    """The best arrangement of :func:`rank_arrangements`."""
+    return rank_arrangements(solver, poses)[0]
 
 
 def regularity(solver: EliminatingSolver, el: Elimination, T_dh: NDArray[np.float64],

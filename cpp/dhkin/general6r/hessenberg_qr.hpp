@@ -4,11 +4,11 @@
 // The textbook algorithm (Golub and Van Loan, "Matrix Computations", 7.5; the structure of
 // LAPACK's dlahqr without the Schur vectors): the active window [low, high] is the trailing
 // unreduced block; each sweep chases a 3 x 1 bulge from the double shift (the eigenvalues of the
-// window's trailing 2 x 2, exceptional shifts at iterations 10 and 20) down the window, and a
-// subdiagonal entry below eps times its two diagonal neighbours splits the window. Since only the
-// eigenvalues are wanted, every reflector is applied inside the window alone (Eigen's RealSchur
-// builds the whole Schur form T, so it updates every row and column: two to three times the
-// work on a 24 x 24 companion). The deflation test is Eigen's (the same accuracy as before).
+// window's trailing 2 x 2, or an exceptional shift every kExceptional sweeps) down the window,
+// and a subdiagonal entry below eps times its two diagonal neighbours splits the window. Since
+// only the eigenvalues are wanted, every reflector is applied inside the window alone (Eigen's
+// RealSchur builds the whole Schur form T, so it updates every row and column). The deflation
+// test is Eigen's (the same accuracy as before).
 #pragma once
 
 #include <algorithm>
@@ -31,21 +31,21 @@ namespace hessenberg_qr_detail {
 constexpr int kSweepsPerRow = 30;
 constexpr int kMinimumRows = 10;
 // Every kExceptional sweeps of one window an exceptional shift is taken (dlahqr's, at 10 and
-// 20): one from the top of the window, then one from its bottom, alternately. A window whose
-// trailing block is a nearly defective multiple eigenvalue can make the standard shifts a fixed
-// point of the sweep (a CRX-10iA special-angle pose: a triple eigenvalue whose last subdiagonal
-// entries only changed sign, sweep after sweep); a shift from the top of the window breaks it.
+// 20): one from the top of the window, then one from its bottom, alternately, to break a cycle
+// of the standard shifts.
 constexpr int kExceptional = 10;
 // A window still whole after kStalled sweeps (both exceptional shifts tried) is split at its
 // smallest subdiagonal entry relative to its diagonal neighbours, where that is at most
 // kStalledSplit. Francis's iteration cannot converge on a nearly defective multiple eigenvalue
-// (every shift polynomial takes the same value at its copies, so the subdiagonal entries between
-// them keep their size: 1.8e-14 and 5.9e-14 beside diagonal entries of 0.54 on that pose, for
-// ever); such an entry is the backward error the split commits, and one of sqrt(eps) (1.5e-8)
-// is no more than the eigenproblem itself carries where the leading matrix is conditioned at
-// kLeadCondition (rounding over its reciprocal condition, ~2e-8). The copies it leaves lie
-// within kCluster of each other (a perturbation d moves an m-fold eigenvalue by ~d^(1/m)), so
-// they are split as one cluster anyway.
+// (every shift polynomial takes nearly the same value at its copies, so the subdiagonal entries
+// between them keep their size): on a CRX-10iA special-angle pose (tests/test_ik_general6r.py,
+// LOST_ROOT_POSES) a triple eigenvalue's last subdiagonal entries, 1.8e-14 and 5.9e-14 beside
+// diagonal entries of 0.54, only changed sign, sweep after sweep, exceptional shifts included.
+// The entry set to zero is the backward error the split commits: there ~3e-14 relative, which
+// moves the triple eigenvalue's copies by ~(3e-14)^(1/3) ~ 3e-5, within kCluster, so they are
+// still split as one cluster. The split is refused above sqrt(eps) (1.5e-8), the error the
+// companion already carries where the leading matrix is conditioned at kLeadCondition (rounding
+// over its reciprocal condition, ~2e-8); such a window fails as before.
 constexpr int kStalled = 3 * kExceptional;
 const double kStalledSplit = std::sqrt(std::numeric_limits<double>::epsilon());
 // dlahqr's exceptional shift: the trailing 2 x 2 replaced by [[w + 0.75 s, -0.4375 s], [s,

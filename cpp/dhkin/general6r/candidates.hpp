@@ -5,11 +5,11 @@
 // theta_k = lead + pi must be invertible: of the four angles shift + {0, 1, 2, 3} pi/2 the first
 // whose matrix is conditioned within kLeadCondition becomes lead (else the best of them), so
 // that no root lies at infinity unless all four are roots. The eigenvalues come from the
-// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp) where A is well
-// conditioned, else from QZ on the pencil (Eigen's real QZ: backward stable, it keeps the
-// eigenvalues of the regular part). Where no leading matrix is well
-// conditioned, or a cluster holds more than kMaxSplit eigenvalues, the pose is solved moved
-// (all_candidates).
+// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] less its eigenvalues +-i (16 x 16 where the
+// table has them: spurious.hpp, eigenvalues.hpp) where A is well conditioned, else from QZ on
+// the 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps the eigenvalues of the regular
+// part). Where no leading matrix is well conditioned, or a cluster holds more than kMaxSplit
+// eigenvalues, the pose is solved moved (all_candidates), by QZ.
 #pragma once
 
 #include <Eigen/Dense>

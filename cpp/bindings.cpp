@@ -412,9 +412,9 @@ class ClosedForm {
       dhkin::PoseInfo pose;
       if (direct) {
         dhkin::solve_pose(plan, target, targets.data() + 16 * i, seed, tolerance, branches, pose);
-      } else {
-        dhkin::solve_branches(plan, target, targets.data() + 16 * i, seed, tolerance, branches,
-                              pose);
+      } else {  // the pipeline itself (no direct path of either kind)
+        dhkin::pipeline_branches(plan, target, targets.data() + 16 * i, seed, tolerance, branches,
+                                 pose);
       }
       const auto counts = dhkin::copy_totals(plan, branches, tolerance, copies);
       for (int b = 0; b < kBranches; ++b) {

@@ -1,12 +1,13 @@
 #!/usr/bin/env python
 """Do two builds of dhkin give the same IK answers? Run once per build, then compare.
 
-    python scripts/compare_builds.py poses poses.npz           # once, with either build
+    python scripts/compare_builds.py poses poses.npz [ROBOT ...]   # once, with either build
     /path/to/A/python scripts/compare_builds.py solve poses.npz a.npz   # from A's checkout
     /path/to/B/python scripts/compare_builds.py solve poses.npz b.npz   # from B's checkout
     python scripts/compare_builds.py compare a.npz b.npz
 
-Poses: 10^4 per robot drawn within the limits (seed 25; 500 with q5 = 0, 200 with q3 = 0),
+Poses: 10^4 per robot (default: ur5, abb_irb1200_7_70, stanford_arm, ur5e_calibrated) drawn
+within the limits (seed 25; 500 with q5 = 0, 200 with q3 = 0),
 tool0 poses by Pinocchio FK, and a random seed per pose. Solved: ``ik_batch_detailed`` with
 copies False and True, unseeded and seeded, workers=1, and ``ik`` on the first 300 poses.
 The comparison prints, per robot, whether every array is bit-identical, else whether the
@@ -24,11 +25,19 @@ FIELDS = ("q", "valid", "flags", "branch", "residuals", "projection", "dropped")
 SETS = ("valid", "branch", "flags", "dropped", "projection")
 
 
-def make_poses(path: str) -> None:
+def robots_in(data: np.lib.npyio.NpzFile) -> list[str]:
+    """The robots of a poses file (keys NAME_T) or of a solutions file (keys NAME/...)."""
+    names = [k[:-2] for k in data.files if k.endswith("_T")]
+    if not names:
+        names = list(dict.fromkeys(k.split("/")[0] for k in data.files))
+    return names
+
+
+def make_poses(path: str, *robots: str) -> None:
     import dhkin
 
     data = {}
-    for name in ROBOTS:
+    for name in robots or ROBOTS:
         robot = dhkin.load(name)
         rng = np.random.default_rng(25)
         q = rng.uniform(robot.lower, robot.upper, size=(10_000, len(robot.lower)))
@@ -44,7 +53,7 @@ def solve(poses_path: str, out_path: str) -> None:
 
     poses = np.load(poses_path)
     out = {}
-    for name in ROBOTS:
+    for name in robots_in(poses):
         robot = dhkin.load(name)
         T, seeds = poses[f"{name}_T"], poses[f"{name}_seed"]
         for copies in (False, True):
@@ -59,7 +68,7 @@ def solve(poses_path: str, out_path: str) -> None:
 
 def compare(a_path: str, b_path: str) -> None:
     a, b = np.load(a_path), np.load(b_path)
-    for name in ROBOTS:
+    for name in robots_in(a):
         keys = [k for k in a.files if k.startswith(name + "/")]
         same = all(a[k].shape == b[k].shape and np.array_equal(a[k], b[k], equal_nan=True)
                    for k in keys)
@@ -71,5 +80,8 @@ def compare(a_path: str, b_path: str) -> None:
 
 
 if __name__ == "__main__":
+    if len(sys.argv) < 2 or sys.argv[1] not in ("poses", "solve", "compare"):
+        print(__doc__)
+        sys.exit(0 if sys.argv[1:2] in (["-h"], ["--help"]) else 2)
     command, *paths = sys.argv[1:]
     {"poses": make_poses, "solve": solve, "compare": compare}[command](*paths)

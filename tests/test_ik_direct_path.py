@@ -5,7 +5,8 @@ only sound if, on every pose it accepts, its answer is the pipeline's bit for bi
 verification errors, flags, copy counts, the per-pose info and the numbers that explain an empty
 answer. Checked here on every closed-form robot, at q5 = 0, special angles, random poses, poses
 out of reach, poses rounded to six digits and with a TCP; and that it declines what it must (a
-refined table, a pose with a seeded candidate) while it takes every regular pose.
+refined table, a pose with a seeded candidate) while it takes every regular pose. On refined
+tables the refined direct path is checked against the pipeline alone (to Newton's last bits).
 """
 
 from __future__ import annotations
@@ -18,7 +19,13 @@ from dhkin.ik.core import WHY_SIZE
 from dhkin.ik.solver import INFO
 from dhkin.transforms import rot_x
 from tests.test_ik_batch import ROBOTS, pose_set
-from tests.test_ik_vendor_poses import EXACT_TABLES, shoulder_singular_q, special_q, vendor
+from tests.test_ik_vendor_poses import (
+    EXACT_TABLES,
+    REFINED_TABLES,
+    shoulder_singular_q,
+    special_q,
+    vendor,
+)
 
 N_POSES = 4000
 
@@ -127,3 +134,28 @@ def test_direct_path_on_vendor_poses(name):
         assert_same_answers(full, direct, done)
         assert done[:2000].all()
         assert not done[2000:2500].any()  # q5 = 0: the seed's wrist split, by the pipeline
+
+
+@pytest.mark.parametrize("name", REFINED_TABLES)
+def test_refined_direct_path_answers_as_the_pipeline(name, load_robot):
+    """On a refined table the solver first tries the refined direct path (closed form and Newton
+    for the eight branches in lanes, cpp/dhkin/refined_direct.hpp) and hands every other pose to
+    the pipeline. Against the pipeline alone (``direct=False``), on random poses, q5 = 0, special
+    angles and poses out of reach, unseeded and seeded: the same branches, flags, copy counts,
+    info and explanations; joint values equal to Newton's last bits (the lanes solve the square
+    Gauss-Newton system, the pipeline its damped least squares) and residuals no larger than
+    the pipeline's or 1e-12."""
+    robot = load_robot(name)
+    assert robot.ik_solver.fit.refine
+    T, seeds = pose_set(robot, 600, seed=37)
+    for seed in (np.zeros((1, robot.dof)), seeds):
+        full, direct, _ = both_paths(robot, T, seed, robot.ik_solver.frames, False)
+        q, ok, flags, errors, totals, why, info = full
+        dq, dok, dflags, derrors, dtotals, dwhy, dinfo = direct
+        np.testing.assert_array_equal(dok, ok)
+        np.testing.assert_array_equal(dflags[ok], flags[ok])
+        np.testing.assert_array_equal(dtotals, totals)
+        np.testing.assert_array_equal(dwhy, why)
+        np.testing.assert_array_equal(dinfo, info)
+        np.testing.assert_allclose(np.angle(np.exp(1j * (dq[ok] - q[ok]))), 0.0, atol=1e-9)
+        assert (derrors[ok] <= np.maximum(errors[ok], 1e-12)).all()

@@ -30,10 +30,12 @@ namespace dhkin {
 
 static_assert(kLanes == kBranches, "one lane per branch");
 
-// Candidates of one pose, branch b in lane b (CandidatesT without the `near` bits).
+// Candidates of one pose, branch b in lane b (CandidatesT without the `near` bits; `clamped`:
+// the near bit kClamped, the candidate moved onto a reach boundary).
 struct BranchLanes {
   JointsT<Lanes> q{};
   Mask valid{};
+  Mask clamped{};
   LaneBits flags{};
   std::array<double, kWhySize> why{};
 };
@@ -121,6 +123,7 @@ inline bool offset_wrist_lanes(const OffsetGeometry& g, const Frame& T,
   const Mask elbow_valid = setup.reach_ok && (!down || !setup.merged);
   out.q = {q1, q2, q3, q4, q5, q6};
   out.valid = q1_valid && wrist_valid && elbow_valid;
+  out.clamped = gap < 0.0 || setup.clamped;
   out.flags = LaneBits(shoulder_flag) | wrist_flag | setup.flag;
   for (int j = 0; j < kDof; ++j) out.valid = out.valid && abs(out.q[j]) < INFINITY;
   return true;
@@ -184,6 +187,7 @@ inline bool spherical_wrist_lanes(const SphericalGeometry& g, const Frame& T,
   out.q = {g.signs[0] * turn1, g.signs[1] * turn2, g.signs[2] * turn3,
            d4 * t4,            d5 * (t5 - g.tilt), d6 * t6};
   out.valid = arm_valid;
+  out.clamped = (arm.near & kClamped) != 0 || outer < 0.0 || inner < 0.0;
   out.flags = LaneBits(arm.flag) | elbow_flag | wrist_flag;
   return true;
 }

@@ -244,45 +244,69 @@ inline PoseErrorT<Product<V, W>> check(const Chain& chain, const V* q, const Fra
 }
 
 // The twist taking `state` to `target`, in DH frame 0: e[0..2] = p_t - p, e[3..5] = the rotation
-// vector of R_t R^T. Returns the two errors.
-inline PoseError error_twist(const Frame& state, const Frame& target, double* e) {
+// vector of R_t R^T. Returns the two errors (per lane for V = Lanes).
+template <class V>
+DHKIN_INLINE PoseErrorT<V> error_twist(const FrameT<V>& state, const Frame& target, V* e) {
   for (int r = 0; r < 3; ++r) e[r] = target.p[r] - state.p[r];
   // M = R_t R^T: its skew part carries sin(angle) * axis, its trace 1 + 2 cos(angle)
-  double m[3][3];
+  V m[3][3];
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
       m[r][c] = target.R[r][0] * state.R[c][0] + target.R[r][1] * state.R[c][1] +
                 target.R[r][2] * state.R[c][2];
     }
   }
-  const double v0 = 0.5 * (m[2][1] - m[1][2]);
-  const double v1 = 0.5 * (m[0][2] - m[2][0]);
-  const double v2 = 0.5 * (m[1][0] - m[0][1]);
-  const double s = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
-  const double angle = atan2(s, 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0));
-  const double scale = s > 0.0 ? angle / s : 1.0;
+  const V v0 = 0.5 * (m[2][1] - m[1][2]);
+  const V v1 = 0.5 * (m[0][2] - m[2][0]);
+  const V v2 = 0.5 * (m[1][0] - m[0][1]);
+  const V s = sqrt(v0 * v0 + v1 * v1 + v2 * v2);
+  const V angle = atan2(s, 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0));
+  const V scale = select(s > 0.0, angle / s, V(1.0));
   e[3] = v0 * scale, e[4] = v1 * scale, e[5] = v2 * scale;
-  return {std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), angle};
+  return {sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), angle};
 }
 
 // The geometric Jacobian (6 x n, row-major J[row * n + j]): linear and angular velocity of DH
-// frame n's origin per unit joint value, in DH frame 0, from fk_frames' frames.
-inline void jacobian(const Chain& chain, const Frame* frames, double* J) {
+// frame n's origin per unit joint value, in DH frame 0, from the frames each joint moves about
+// (frames[j]) and T(q) (frames[n]), as fk_frames and chain_frames give them (per lane for
+// V = Lanes).
+template <class V>
+DHKIN_INLINE void jacobian(const Chain& chain, const FrameT<V>* frames, V* J) {
   const int n = chain.dof();
-  const Frame& end = frames[n];
+  const FrameT<V>& end = frames[n];
   for (int j = 0; j < n; ++j) {
     const double d = chain.joints[j].direction;
-    const Vec3 z = frames[j].column(2);
+    const Vec3T<V> z = frames[j].column(2);
     if (chain.joints[j].revolute) {
-      const Vec3 arm = end.translation() - frames[j].translation();
-      const Vec3 v = cross(z, arm);
+      const Vec3T<V> arm = end.translation() - frames[j].translation();
+      const Vec3T<V> v = cross(z, arm);
       J[0 * n + j] = d * v.x, J[1 * n + j] = d * v.y, J[2 * n + j] = d * v.z;
       J[3 * n + j] = d * z.x, J[4 * n + j] = d * z.y, J[5 * n + j] = d * z.z;
     } else {
       J[0 * n + j] = d * z.x, J[1 * n + j] = d * z.y, J[2 * n + j] = d * z.z;
-      J[3 * n + j] = 0.0, J[4 * n + j] = 0.0, J[5 * n + j] = 0.0;
+      J[3 * n + j] = V(0.0), J[4 * n + j] = V(0.0), J[5 * n + j] = V(0.0);
     }
   }
+}
+
+// fk_frames of a chain of kDof joints on the lane type, from its motions at q: the frame each
+// joint moves about in frames[j], T(q) in frames[kDof]. The constant frames' products skip their
+// zero terms (times_constant), so the values equal fk_frames' short of the sign of a zero.
+template <class V>
+DHKIN_INLINE void chain_frames(const Chain& chain, const ChainShape& shape,
+                               const JointMotions<V>& motions, FrameT<V>* frames) {
+  FrameT<V> state = broadcast<V>(chain.joints[0].before);
+  for (int j = 0; j < kDof; ++j) {
+    if (j > 0) times_constant(state, chain.joints[j].before, shape.before[j]);
+    frames[j] = state;
+    if (chain.joints[j].revolute) {
+      turn_about_z(state, motions.turn[j].c, motions.turn[j].s);
+    } else {
+      slide_along_z(state, motions.variable[j]);
+    }
+  }
+  times_constant(state, chain.tail, shape.tail);
+  frames[kDof] = state;
 }
 
 // The chain whose tail ends at `point` (given in DH frame n): errors are then measured there.

@@ -19,7 +19,9 @@
 // Step 4 (the 2pi copies) is expand.hpp. The direct path (direct_branches) is steps 1-3 for a
 // regular pose of an exact-family table (no seeded candidate, every candidate verifies as
 // computed, no two branches merge): the same answer with a fraction of the work; every other
-// pose goes on to solve_branches.
+// pose goes on to solve_branches. On a refined table solve_branches first tries the refined
+// direct path (direct_refined_branches, refined_direct.hpp): a regular pose's eight candidates
+// refined by Newton in lanes; a pose that needs any of the repairs below takes the pipeline.
 //
 // `clamp`: reach conditions violated by at most tolerance x (1 + lever) + twice the model
 // deviation are clamped onto their boundary, polished and verified, not rejected: a pose whose
@@ -33,16 +35,17 @@
 #include "dhkin/members.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
+#include "dhkin/refined_direct.hpp"
 #include "dhkin/roots.hpp"
 #include "dhkin/settle.hpp"
 
 namespace dhkin {
 
-// Steps 1-3 for one pose (any pose): the branches' verified principal solutions and the pose's
-// info.
-inline void solve_branches(const Plan& plan, const TargetFrames& frames, const double* T,
-                           const Joints& seed, double tolerance, Branches& branches,
-                           PoseInfo& info) {
+// Steps 1-3 for one pose (any pose) by the pipeline itself: the branches' verified principal
+// solutions and the pose's info.
+inline void pipeline_branches(const Plan& plan, const TargetFrames& frames, const double* T,
+                              const Joints& seed, double tolerance, Branches& branches,
+                              PoseInfo& info) {
   tolerance = plan.verification_tolerance(tolerance);
   PoseTargets targets;
   if (!begin_pose(frames, T, seed, info, branches, targets)) return;
@@ -247,6 +250,17 @@ inline void solve_branches(const Plan& plan, const TargetFrames& frames, const d
     }
   }
   info.best_position = best_position, info.best_rotation = best_rotation;
+}
+
+// Steps 1-3 for one pose (any pose): on a refined table the refined direct path, else the
+// pipeline.
+inline void solve_branches(const Plan& plan, const TargetFrames& frames, const double* T,
+                           const Joints& seed, double tolerance, Branches& branches,
+                           PoseInfo& info) {
+  if (plan.refine && direct_refined_branches(plan, frames, T, seed, tolerance, branches, info)) {
+    return;
+  }
+  pipeline_branches(plan, frames, T, seed, tolerance, branches, info);
 }
 
 // Steps 1-3 for one pose: the direct path, else the pipeline.

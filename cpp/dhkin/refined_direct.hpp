@@ -1,0 +1,109 @@
+// Steps 1-3 of a regular pose of a refined table (corrections, rounded constants): the direct
+// path of the refined road.
+//
+// For most poses of a refined table the pipeline (solve_branches, pipeline.hpp) reduces to: the
+// ideal model's closed form, each candidate settled by Newton on the exact chain and verified, the
+// seed's root looked for (seed_root), the flags set. That holds when no candidate lies within the
+// seed band of a singularity (no `near` bit of a free joint: no seeded candidate, no valley scan),
+// no branch is a long shot (a candidate clamped onto a reach boundary that the ideal model cannot
+// reach: the pipeline chases those by continuation and corrected-target retries), every
+// candidate settles as Newton does near a regular root (refine_lanes; no polish, continuation or
+// retry then applies) and verifies, and no two branches give one solution (no merge, no twin
+// search). direct_refined_branches does those steps with the eight branches in lanes
+// (branch_lanes.hpp, newton_lanes.hpp); for any other pose it returns false and the caller runs
+// the pipeline. Its answer is the pipeline's up to the last bits of Newton's iterates (the lanes
+// solve the square Gauss-Newton system without the damping floor of the scalar least squares):
+// the same branches, flags and counts, residuals at the limit of the arithmetic.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "dhkin/branch_lanes.hpp"
+#include "dhkin/direct.hpp"
+#include "dhkin/newton_lanes.hpp"
+#include "dhkin/plan.hpp"
+#include "dhkin/roots.hpp"
+
+namespace dhkin {
+
+// Whether every joint value of the lane is finite.
+inline Mask finite_lanes(const JointsT<Lanes>& q) {
+  Mask out = uniform(true);
+  for (int j = 0; j < kDof; ++j) out = out && abs(q[j]) < INFINITY;
+  return out;
+}
+
+// Steps 1-3 for a regular pose of a refined table of the spherical-wrist or offset-wrist family;
+// false (outputs undefined) for a pose that needs the pipeline. A rejected pose or seed is
+// answered here (info.status).
+inline bool direct_refined_branches(const Plan& plan, const TargetFrames& frames, const double* T,
+                                    const Joints& seed, double tolerance, Branches& branches,
+                                    PoseInfo& info) {
+  if (!plan.refine || plan.family == Family::stanford) return false;
+  tolerance = plan.verification_tolerance(tolerance);
+  PoseTargets targets;
+  if (!begin_pose(frames, T, seed, info, branches, targets)) return true;
+  const FamilyRequest request{&seed, 0, plan.seed_angle, plan.seed_length, plan.clamp(tolerance)};
+  BranchLanes found;
+  const bool regular =
+      plan.family == Family::offset_wrist
+          ? offset_wrist_lanes(plan.offset, targets.T_dh, request, found)
+          : spherical_wrist_lanes(plan.spherical, targets.T_dh, request, found);
+  if (!regular) return false;  // a seeded candidate to try
+  if (any(!found.valid && found.clamped && finite_lanes(found.q))) return false;  // a long shot
+  JointsT<Lanes> q;  // zero where not valid (its lane is ignored)
+  for (int j = 0; j < kDof; ++j) {
+    q[j] = select(found.valid, found.q[j], Lanes(0.0));
+    if (plan.revolute(j)) q[j] = wrap(q[j]);
+  }
+  const LaneRefinement refined =
+      refine_lanes(plan.chain, ChainShape(plan.chain), targets.T_at, q, found.valid, tolerance);
+  if (any(found.valid && !refined.settled)) return false;  // for the scalar refinement
+  for (int j = 0; j < kDof; ++j) {
+    if (plan.revolute(j)) q[j] = wrap(q[j]);
+  }
+  const PoseErrorT<Lanes> errors = check(plan.chain, q.data(), targets.T_at);
+  if (any(found.valid && !errors.within(tolerance))) return false;
+  // every pair of branches a < b at once: lane a against lane b = a ^ m, for m = 1..7
+  alignas(64) static const double kIndex[kLanes] = {0, 1, 2, 3, 4, 5, 6, 7};
+  const Lanes index = Lanes::load(kIndex);
+  for (int m = 1; m < kBranches; ++m) {
+    JointsT<Lanes> other;
+    for (int j = 0; j < kDof; ++j) other[j] = swapped(q[j], m);
+    const Mask pair = found.valid && swapped(found.valid, m) && index < swapped(index, m);
+    if (any(pair && plan.same(q, other, 2.0 * kMergeAngle))) return false;  // to be merged
+  }
+  info.why = found.why;
+  alignas(64) double values[kDof][kLanes], regular_q[kDof][kLanes], position[kLanes],
+      rotation[kLanes];
+  alignas(64) std::int64_t regular_flags[kLanes];
+  for (int j = 0; j < kDof; ++j) {
+    q[j].store(values[j]);
+    found.q[j].store(regular_q[j]);
+  }
+  errors.position.store(position);
+  errors.rotation.store(rotation);
+  std::memcpy(regular_flags, &found.flags.v, sizeof regular_flags);
+  for (int b = 0; b < kBranches; ++b) {
+    branches.flags[b] = static_cast<std::uint8_t>(regular_flags[b]);
+    if (!lane(found.valid, b)) {
+      for (int j = 0; j < kDof; ++j) branches.q[b][j] = regular_q[j][b];
+      continue;
+    }
+    for (int j = 0; j < kDof; ++j) branches.q[b][j] = values[j][b];
+    branches.ok[b] = true;
+    branches.errors[b] = {position[b], rotation[b]};
+    ++info.candidates;
+  }
+  seed_root(plan, targets.T_at, seed, tolerance, branches);
+  for (int b = 0; b < kBranches; ++b) {
+    if (!branches.ok[b]) continue;
+    branches.flags[b] = (regular_flags[b] & kShoulder) | plan.value_flags(branches.q[b]);
+    ++info.verified;
+  }
+  return true;
+}
+
+}  // namespace dhkin

@@ -1,0 +1,81 @@
+#!/usr/bin/env python
+"""Where a refined table's IK time goes, pose by pose: the heavy tail against the common case.
+
+    python scripts/profile_refined.py [--poses 3000] [ROBOT ...]
+
+For each robot (default: ur5e_calibrated, tm5_900, kinova_gen3_6dof), poses drawn uniformly
+within the limits (fixed seed, Pinocchio FK on the table) are solved one call at a time
+(``robot.ik(T, copies=False)``, unseeded) and each call is timed. Printed per robot: the median,
+mean and upper quantiles of the per-call time, the share of poses and of the total time above
+10, 100 and 1000 us, and the same against the number of branches the ideal model solves (a pose
+whose ideal model misses branches has long shots: candidates clamped onto a reach boundary that
+the pipeline chases on the exact chain before it drops them). The mean is what ``ik_batch``
+pays per pose; the median is the single-call figure of scripts/bench_ik.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import time
+from collections.abc import Sequence
+
+import numpy as np
+
+import dhkin
+
+ROBOTS = ("ur5e_calibrated", "tm5_900", "kinova_gen3_6dof")
+
+
+def call_times(robot: dhkin.Robot, poses: np.ndarray) -> np.ndarray:
+    """Per-call time (us) of robot.ik(T, copies=False) for each pose, after one warm-up pass."""
+    for T in poses[:50]:
+        robot.ik(T, copies=False)
+    times = np.empty(len(poses))
+    gc.disable()
+    try:
+        for i, T in enumerate(poses):
+            start = time.perf_counter_ns()
+            robot.ik(T, copies=False)
+            times[i] = (time.perf_counter_ns() - start) / 1e3
+    finally:
+        gc.enable()
+    return times
+
+
+def report(name: str, n: int) -> list[str]:
+    robot = dhkin.load(name)
+    q = robot.table.random_q(n, np.random.default_rng(25))
+    poses = np.ascontiguousarray(robot.reference().fk(q))
+    times = call_times(robot, poses)
+    ideal = dhkin.Robot(robot.ik_solver.fit.ideal)
+    ideal_branches = ideal.ik_batch_detailed(poses, copies=False, workers=1).valid.sum(axis=1)
+    quantiles = np.quantile(times, [0.5, 0.9, 0.99])
+    lines = [f"### {name}: {n} poses", "",
+             f"per call: median {quantiles[0]:.1f} us, mean {times.mean():.1f} us, "
+             f"p90 {quantiles[1]:.1f} us, p99 {quantiles[2]:.1f} us, max {times.max():.0f} us",
+             "", "| calls over | poses | share of the time |", "|---|---:|---:|"]
+    for limit in (10, 100, 1000):
+        slow = times > limit
+        lines.append(f"| {limit} us | {slow.mean():.1%} | {times[slow].sum() / times.sum():.1%} |")
+    lines += ["", "| ideal model branches | poses | median (us) | mean (us) | share of time |",
+              "|---:|---:|---:|---:|---:|"]
+    for count in np.unique(ideal_branches):
+        group = ideal_branches == count
+        lines.append(f"| {count} | {group.sum()} | {np.median(times[group]):.1f} | "
+                     f"{times[group].mean():.1f} | {times[group].sum() / times.sum():.1%} |")
+    return [*lines, ""]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("robots", nargs="*", default=list(ROBOTS))
+    parser.add_argument("--poses", type=int, default=3000)
+    args = parser.parse_args(argv)
+    for name in args.robots:
+        print("\n".join(report(name, args.poses)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

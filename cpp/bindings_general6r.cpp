@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "dhkin/general6r/reference.hpp"
-#include "dhkin/general6r/spurious.hpp"
 #include "dhkin/general6r/solver.hpp"
 
 namespace nb = nanobind;
@@ -99,7 +98,6 @@ g6::Elimination elimination_from(const nb::dict& f) {
   el.band = field(f, "band", 1)[0];
   el.direction = joints_of(field(f, "direction", kDof));
   el.offset = joints_of(field(f, "offset", kDof));
-  el.deflation = g6::spurious_deflation(el);
   return el;
 }
 

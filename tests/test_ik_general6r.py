@@ -348,6 +348,34 @@ def test_every_isolated_root_at_special_angles(name: str, degrees: list[float]) 
     assert np.all(d.min(axis=1) <= 1e-9)
 
 
+#: Poses of `dhkin check` (seed 0: CRX-10iA uniform sample 2326, HC10DT near-singular sample
+#: 11016) whose root lies 1.8e-5 rad (CRX-10iA) and 1e-6 rad (HC10DT) in theta_2 from another
+#: root's: a nearly double eigenvalue of the companion, which a QR iteration resolves only to
+#: its backward error over the gap. Deflating the eigenvalues +-i by a constant orthogonal basis
+#: undid the companion's balancing (the deflated matrix's norm ~1e6 against ~50 balanced on the
+#: HC10DT pose) and scattered the pair by 3e-4 to 6e-4 rad: the root was lost.
+NEAR_DOUBLE_POSES = [
+    ("fanuc_crx10ia", [-1.3252076916882785, -1.9031331755445116, 2.2318910050791123,
+                       -1.8376890649785715, 3.1176090779758727, 3.0909496408603063]),
+    ("motoman_hc10dt", [2.023436611934426, -2.659816867168698, 3.62328207806369,
+                        -1.4919549505431418, -0.0, 1.0721349745253512]),
+]
+
+
+@pytest.mark.parametrize(("name", "q"), NEAR_DOUBLE_POSES)
+def test_nearly_double_eigenvalue_keeps_both_roots(name: str, q: list[float]) -> None:
+    """Unseeded, the answer at a pose made by Pinocchio from q (generated URDF) holds q."""
+    from dhkin.validation.multistart import missing_roots
+    from dhkin.validation.references import ReferenceSpec, TargetModel
+
+    robot = dhkin.load(name)
+    model = TargetModel(ReferenceSpec(kind="exact"), robot.reference())
+    T = model.fk(np.array(q))
+    answer = robot.ik(T)
+    assert not missing_roots(model, T, np.array([q]), answer.q, DEFAULT_TOLERANCE, SAME)
+    assert len(answer) % 2 == 0
+
+
 def test_shared_eigenvalues_are_split_into_each_root() -> None:
     """The cause of the lost roots: at q = (0, 0, 0, -90, 90, 180) deg four of the CRX-10iA's
     eight roots share the eliminated joint's value; the null space of M there is split into

@@ -1,8 +1,7 @@
 // The eigenvalues of the general 6R elimination's companion matrix and pencil.
 //
-// The companion K = [[0, I], [X, Y]] (X = -A^-1 C, Y = -A^-1 B, 24 x 24) less its eigenvalues
-// +-i, which every pose has (spurious.hpp): W^T K W (16 x 16 on every table tried), balanced
-// (as LAPACK's dgeev does first), reduced to Hessenberg form, then Francis's double-shift QR,
+// The companion K = [[0, I], [X, Y]] (X = -A^-1 C, Y = -A^-1 B, 24 x 24), balanced (as
+// LAPACK's dgeev does first), reduced to Hessenberg form, then Francis's double-shift QR,
 // eigenvalues only (hessenberg_qr.hpp). A pencil: Eigen's real QZ (GeneralizedEigenSolver) on the
 // whole 24 x 24.
 #pragma once
@@ -64,32 +63,19 @@ inline bool matrix_eigenvalues(Matrix24& K, int n, Eigenvalues& out) {
   return hessenberg_eigenvalues(K, n, out);
 }
 
-// The eigenvalues of the companion of M(x) = A x^2 + B x + C but the +-i that `deflation` takes
-// out, into out(0 .. count-1): those of W^T K W (W the deflation's complement), or of K itself
-// where the table has no deflation. A_inverse = A^-1. False where the QR iteration does not
-// converge.
-inline bool companion_eigenvalues(const Deflation& deflation, const Matrix12& A_inverse,
-                                  const Matrix12& B, const Matrix12& C, Eigenvalues& out,
-                                  int& count) {
-  Matrix24 K;
-  count = kEigenvalues - deflation.dimension;
-  if (deflation.dimension == 0) {
-    K.setZero();
-    K.topRightCorner<kMonomials, kMonomials>().setIdentity();
-    K.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
-    K.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
-  } else {
-    // W^T K W = W1^T W2 + W2^T (X W1 + Y W2), X W1 + Y W2 = -A^-1 (C W1 + B W2)
-    const auto W = deflation.basis.rightCols(count);
-    const auto W1 = W.topRows(kMonomials);
-    const auto W2 = W.bottomRows(kMonomials);
-    using Block = Eigen::Matrix<double, kMonomials, Eigen::Dynamic, 0, kMonomials, kEigenvalues>;
-    const Block G = C * W1 + B * W2;
-    const Block XY = -(A_inverse * G);
-    K.topLeftCorner(count, count) =
-        deflation.top_bottom.topLeftCorner(count, count) + W2.transpose() * XY;
-  }
-  return matrix_eigenvalues(K, count, out);
+// The eigenvalues of the companion of M(x) = A x^2 + B x + C (A_inverse = A^-1) into out; false
+// where the QR iteration does not converge. The whole 24 x 24 companion is solved, its eigenvalues
+// +-i included (docs/general6r.md, "Speed": deflating them by a constant orthogonal basis, 16 x
+// 16, undid the balancing, whose diagonal similarity is the pose's: on an HC10DT pose the deflated
+// matrix's norm was 1e6 against 47 balanced, and a nearly double eigenvalue, two roots 1e-6 rad
+// apart, scattered by 6e-4 rad and a root was lost).
+inline bool companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, const Matrix12& C,
+                                  Eigenvalues& out) {
+  Matrix24 K = Matrix24::Zero();
+  K.topRightCorner<kMonomials, kMonomials>().setIdentity();
+  K.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
+  K.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
+  return matrix_eigenvalues(K, kEigenvalues, out);
 }
 
 // The eigenvalues of the pencil L - x R (an infinite one, beta = 0, as infinity); false where QZ

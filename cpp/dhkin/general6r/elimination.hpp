@@ -51,19 +51,6 @@ inline Frame dh_frame(double theta, const DHRow& row) {
   return out;
 }
 
-// The deflation of the companion's eigenvalues +-i, the same at every pose (spurious.hpp): basis
-// is orthogonal, its first `dimension` columns span the companion's invariant subspace of those
-// eigenvalues (0: none, the whole companion is solved), the other columns W = [W1; W2] (top and
-// bottom 12 rows) its complement; top_bottom holds W1^T W2, the pose-independent part of
-// W^T K W (leading block).
-struct Deflation {
-  int dimension = 0;
-  Eigen::Matrix<double, kEigenvalues, kEigenvalues> basis =
-      Eigen::Matrix<double, kEigenvalues, kEigenvalues>::Identity();
-  Eigen::Matrix<double, kEigenvalues, kEigenvalues> top_bottom =
-      Eigen::Matrix<double, kEigenvalues, kEigenvalues>::Zero();
-};
-
 struct Elimination {
   // P(theta_k) = P[0] cos + P[1] sin + P[2]: the left side's 14 quantities over the products
   // of (cos, sin, 1) of theta_k+1 and theta_k+2.
@@ -89,7 +76,6 @@ struct Elimination {
   double scale = 1.0;        // the model's length unit (m)
   double band = 0.1;         // largest imaginary part of an eigenvalue's angle taken (rad)
   Joints direction{}, offset{};  // v_j = direction_j q_j + offset_j (the table's joints)
-  Deflation deflation;       // set from P and half2 by spurious_deflation (spurious.hpp)
 
   // URDF joint values of the model angles theta.
   Joints joint_values(const Joints& theta) const {

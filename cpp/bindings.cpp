@@ -347,6 +347,24 @@ class Answer {
   std::size_t stored_ = 0;
 };
 
+// The seed of pose i: row i of (N, 6) seeds, or the one row of (1, 6).
+Joints seed_row(const Input<double, nb::shape<-1, kDof>>& seeds, std::size_t i) {
+  return joints_of(seeds.data() + kDof * (seeds.shape(0) == 1 ? 0 : i));
+}
+
+// A batch call's frames (base_link -> DH frame 0, DH frame n -> TCP) and the solver's plan for
+// them (`plan` points into `storage` when the call's TCP is not the table's own).
+struct CallPlan {
+  CallPlan(const dhkin::ClosedFormSolver& solver, const Input<double, nb::shape<2, 4, 4>>& frames)
+      : target(target_frames(frames)), plan(&solver.plan_for(target, storage)) {}
+  CallPlan(const CallPlan&) = delete;
+  CallPlan& operator=(const CallPlan&) = delete;
+
+  dhkin::TargetFrames target;
+  dhkin::Plan storage;
+  const dhkin::Plan* plan;
+};
+
 class ClosedForm {
  public:
   ClosedForm(const nb::dict& plan, Input<double, nb::shape<2, 4, 4>> frames)
@@ -402,12 +420,12 @@ class ClosedForm {
     const std::size_t n = targets.shape(0);
     check_rows(n, seeds.shape(0), {q.shape(0), ok.shape(0), flags.shape(0), errors.shape(0),
                                    totals.shape(0), why.shape(0), info.shape(0)});
-    const dhkin::TargetFrames target = target_frames(frames);
-    dhkin::Plan storage;
-    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    const CallPlan call(solver_, frames);
+    const dhkin::TargetFrames& target = call.target;
+    const dhkin::Plan& plan = *call.plan;
     nb::gil_scoped_release release;
     for (std::size_t i = 0; i < n; ++i) {
-      const Joints seed = joints_of(seeds.data() + kDof * (seeds.shape(0) == 1 ? 0 : i));
+      const Joints seed = seed_row(seeds, i);
       dhkin::Branches branches;
       dhkin::PoseInfo pose;
       if (direct) {
@@ -447,9 +465,9 @@ class ClosedForm {
     const std::size_t n = targets.shape(0);
     check_rows(n, seeds.shape(0), {q.shape(0), valid.shape(0), branch.shape(0), flags.shape(0),
                                    errors.shape(0), projection.shape(0), dropped.shape(0)});
-    const dhkin::TargetFrames target = target_frames(frames);
-    dhkin::Plan storage;
-    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    const CallPlan call(solver_, frames);
+    const dhkin::TargetFrames& target = call.target;
+    const dhkin::Plan& plan = *call.plan;
     const dhkin::NearestOutputs out{q.data(), valid.data(), branch.data(), flags.data(),
                                     errors.data(), projection.data(), dropped.data()};
     nb::gil_scoped_release release;
@@ -466,12 +484,12 @@ class ClosedForm {
                       Output<bool, nb::ndim<1>> answered) {
     const std::size_t n = targets.shape(0);
     check_rows(n, seeds.shape(0), {answered.shape(0)});
-    const dhkin::TargetFrames target = target_frames(frames);
-    dhkin::Plan storage;
-    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    const CallPlan call(solver_, frames);
+    const dhkin::TargetFrames& target = call.target;
+    const dhkin::Plan& plan = *call.plan;
     nb::gil_scoped_release release;
     for (std::size_t i = 0; i < n; ++i) {
-      const Joints seed = joints_of(seeds.data() + kDof * (seeds.shape(0) == 1 ? 0 : i));
+      const Joints seed = seed_row(seeds, i);
       dhkin::Branches branches;
       dhkin::PoseInfo pose;
       answered(i) = dhkin::direct_branches(plan, target, targets.data() + 16 * i, seed, tolerance,
@@ -498,14 +516,14 @@ class ClosedForm {
         out_flags.shape(1) != width || out_errors.shape(1) != width) {
       throw std::invalid_argument("expand: output arrays differ in width");
     }
-    const dhkin::TargetFrames target = target_frames(frames);
-    dhkin::Plan storage;
-    const dhkin::Plan& plan = solver_.plan_for(target, storage);
+    const CallPlan call(solver_, frames);
+    const dhkin::TargetFrames& target = call.target;
+    const dhkin::Plan& plan = *call.plan;
     bool overflow = false;
     {
       nb::gil_scoped_release release;
       for (std::size_t i = 0; i < n && !overflow; ++i) {
-        const Joints seed = joints_of(seeds.data() + kDof * (seeds.shape(0) == 1 ? 0 : i));
+        const Joints seed = seed_row(seeds, i);
         dhkin::Branches branches;
         for (int b = 0; b < kBranches; ++b) {
           branches.q[b] = joints_of(&q(i, b, 0));

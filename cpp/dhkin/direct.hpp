@@ -77,6 +77,57 @@ inline bool begin_pose(const TargetFrames& frames, const double* T, const Joints
   return pose_targets(frames, T, seed, info.status, info.projection, targets);
 }
 
+// What the closed form in branch lanes made of a pose (closed_form_lanes).
+enum class LaneStart {
+  answered,   // the pose or the seed was rejected: info.status says why
+  irregular,  // a candidate within the seed band of a singularity: the pipeline's step 2
+  solved,     // the eight branches are in `found`
+};
+
+// Steps 1-2 in branch lanes, shared by both direct paths (this one and refined_direct.hpp): the
+// pose and the seed checked, the targets computed and the family's closed form solved with the
+// eight branches in lanes. `tolerance` is the plan's verification tolerance.
+inline LaneStart closed_form_lanes(const Plan& plan, const TargetFrames& frames, const double* T,
+                                   const Joints& seed, double tolerance, Branches& branches,
+                                   PoseInfo& info, PoseTargets& targets, BranchLanes& found) {
+  if (!begin_pose(frames, T, seed, info, branches, targets)) return LaneStart::answered;
+  const FamilyRequest request{&seed, 0, plan.seed_angle, plan.seed_length, plan.clamp(tolerance)};
+  const bool regular =
+      plan.family == Family::offset_wrist
+          ? offset_wrist_lanes(plan.offset, targets.T_dh, request, found)
+          : spherical_wrist_lanes(plan.spherical, targets.T_dh, request, found);
+  return regular ? LaneStart::solved : LaneStart::irregular;
+}
+
+// The revolute joints of every lane wrapped into (-pi, pi].
+inline void wrap_revolute_lanes(const Plan& plan, JointsT<Lanes>& q) {
+  for (int j = 0; j < kDof; ++j) {
+    if (plan.revolute(j)) q[j] = wrap(q[j]);
+  }
+}
+
+// The valid branches' joint values, revolute joints wrapped; zero in the other lanes (ignored).
+inline JointsT<Lanes> wrapped_branches(const Plan& plan, const BranchLanes& found) {
+  JointsT<Lanes> q;
+  for (int j = 0; j < kDof; ++j) q[j] = select(found.valid, found.q[j], Lanes(0.0));
+  wrap_revolute_lanes(plan, q);
+  return q;
+}
+
+// Whether two valid branches give one solution (within twice the merge angle): the pipeline
+// then merges them. Every pair a < b at once: lane a against lane b = a ^ m, for m = 1..7.
+inline bool two_branches_one_solution(const Plan& plan, const JointsT<Lanes>& q, Mask valid) {
+  alignas(64) static const double kIndex[kLanes] = {0, 1, 2, 3, 4, 5, 6, 7};
+  const Lanes index = Lanes::load(kIndex);
+  for (int m = 1; m < kBranches; ++m) {
+    JointsT<Lanes> other;
+    for (int j = 0; j < kDof; ++j) other[j] = swapped(q[j], m);
+    const Mask pair = valid && swapped(valid, m) && index < swapped(index, m);
+    if (any(pair && plan.same(q, other, 2.0 * kMergeAngle))) return true;
+  }
+  return false;
+}
+
 // direct_branches of the spherical-wrist and offset-wrist families: the closed form, the wrap,
 // the check and the flags with the pose's eight branches in lanes (branch_lanes.hpp); the same
 // steps on the same values as the scalar code below, so the same bits.
@@ -85,22 +136,17 @@ inline bool direct_branch_lanes(const Plan& plan, const TargetFrames& frames, co
                                 PoseInfo& info) {
   tolerance = plan.verification_tolerance(tolerance);
   PoseTargets targets;
-  if (!begin_pose(frames, T, seed, info, branches, targets)) return true;
-  const FamilyRequest request{&seed, 0, plan.seed_angle, plan.seed_length, plan.clamp(tolerance)};
   BranchLanes found;
-  const bool regular =
-      plan.family == Family::offset_wrist
-          ? offset_wrist_lanes(plan.offset, targets.T_dh, request, found)
-          : spherical_wrist_lanes(plan.spherical, targets.T_dh, request, found);
-  if (!regular) return false;  // a seeded candidate to try: the pipeline's step 2
-  info.why = found.why;
-  JointsT<Lanes> q;  // zero where not valid (its lane is ignored)
-  for (int j = 0; j < kDof; ++j) {
-    q[j] = select(found.valid, found.q[j], Lanes(0.0));
-    if (plan.revolute(j)) q[j] = wrap(q[j]);
+  switch (closed_form_lanes(plan, frames, T, seed, tolerance, branches, info, targets, found)) {
+    case LaneStart::answered: return true;
+    case LaneStart::irregular: return false;
+    case LaneStart::solved: break;
   }
+  info.why = found.why;
+  const JointsT<Lanes> q = wrapped_branches(plan, found);
   const PoseErrorT<Lanes> errors = check(plan.chain, q.data(), targets.T_at);
   if (any(found.valid && !errors.within(tolerance))) return false;  // the pipeline's step 3
+  if (two_branches_one_solution(plan, q, found.valid)) return false;  // the pipeline merges them
   alignas(64) double values[kDof][kLanes], position[kLanes], rotation[kLanes];
   alignas(64) std::int64_t flags[kLanes];
   for (int j = 0; j < kDof; ++j) q[j].store(values[j]);
@@ -113,24 +159,9 @@ inline bool direct_branch_lanes(const Plan& plan, const TargetFrames& frames, co
     for (int j = 0; j < kDof; ++j) branches.q[b][j] = values[j][b];
     branches.ok[b] = true;
     branches.errors[b] = {position[b], rotation[b]};
+    branches.flags[b] = static_cast<std::uint8_t>(flags[b]);
     ++info.candidates;
-  }
-  // every pair of branches a < b at once: lane a against lane b = a ^ m, for m = 1..7
-  alignas(64) static const double kIndex[kLanes] = {0, 1, 2, 3, 4, 5, 6, 7};
-  const Lanes index = Lanes::load(kIndex);
-  for (int m = 1; m < kBranches; ++m) {
-    JointsT<Lanes> other;
-    for (int j = 0; j < kDof; ++j) other[j] = swapped(q[j], m);
-    const Mask pair = found.valid && swapped(found.valid, m) && index < swapped(index, m);
-    if (any(pair && plan.same(q, other, 2.0 * kMergeAngle))) {
-      return false;  // one solution from two branches: the pipeline merges them
-    }
-  }
-  for (int b = 0; b < kBranches; ++b) {
-    if (branches.ok[b]) {
-      branches.flags[b] = static_cast<std::uint8_t>(flags[b]);
-      ++info.verified;
-    }
+    ++info.verified;
   }
   return true;
 }

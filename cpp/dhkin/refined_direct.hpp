@@ -44,37 +44,21 @@ inline bool direct_refined_branches(const Plan& plan, const TargetFrames& frames
   if (!plan.refine || plan.family == Family::stanford) return false;
   tolerance = plan.verification_tolerance(tolerance);
   PoseTargets targets;
-  if (!begin_pose(frames, T, seed, info, branches, targets)) return true;
-  const FamilyRequest request{&seed, 0, plan.seed_angle, plan.seed_length, plan.clamp(tolerance)};
   BranchLanes found;
-  const bool regular =
-      plan.family == Family::offset_wrist
-          ? offset_wrist_lanes(plan.offset, targets.T_dh, request, found)
-          : spherical_wrist_lanes(plan.spherical, targets.T_dh, request, found);
-  if (!regular) return false;  // a seeded candidate to try
-  if (any(!found.valid && found.clamped && finite_lanes(found.q))) return false;  // a long shot
-  JointsT<Lanes> q;  // zero where not valid (its lane is ignored)
-  for (int j = 0; j < kDof; ++j) {
-    q[j] = select(found.valid, found.q[j], Lanes(0.0));
-    if (plan.revolute(j)) q[j] = wrap(q[j]);
+  switch (closed_form_lanes(plan, frames, T, seed, tolerance, branches, info, targets, found)) {
+    case LaneStart::answered: return true;
+    case LaneStart::irregular: return false;  // a seeded candidate to try
+    case LaneStart::solved: break;
   }
+  if (any(!found.valid && found.clamped && finite_lanes(found.q))) return false;  // a long shot
+  JointsT<Lanes> q = wrapped_branches(plan, found);
   const LaneRefinement refined =
       refine_lanes(plan.chain, ChainShape(plan.chain), targets.T_at, q, found.valid, tolerance);
   if (any(found.valid && !refined.settled)) return false;  // for the scalar refinement
-  for (int j = 0; j < kDof; ++j) {
-    if (plan.revolute(j)) q[j] = wrap(q[j]);
-  }
+  wrap_revolute_lanes(plan, q);
   const PoseErrorT<Lanes> errors = check(plan.chain, q.data(), targets.T_at);
   if (any(found.valid && !errors.within(tolerance))) return false;
-  // every pair of branches a < b at once: lane a against lane b = a ^ m, for m = 1..7
-  alignas(64) static const double kIndex[kLanes] = {0, 1, 2, 3, 4, 5, 6, 7};
-  const Lanes index = Lanes::load(kIndex);
-  for (int m = 1; m < kBranches; ++m) {
-    JointsT<Lanes> other;
-    for (int j = 0; j < kDof; ++j) other[j] = swapped(q[j], m);
-    const Mask pair = found.valid && swapped(found.valid, m) && index < swapped(index, m);
-    if (any(pair && plan.same(q, other, 2.0 * kMergeAngle))) return false;  // to be merged
-  }
+  if (two_branches_one_solution(plan, q, found.valid)) return false;  // to be merged
   info.why = found.why;
   alignas(64) double values[kDof][kLanes], regular_q[kDof][kLanes], position[kLanes],
       rotation[kLanes];

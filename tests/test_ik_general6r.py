@@ -316,6 +316,10 @@ LOST_ROOT_POSES = [
     ("xarm6", [-90.0, 90.0, 0.0, 0.0, 0.0, 0.0]),
     ("ur5_tilted", [0.0, 90.0, 90.0, 90.0, 90.0, 0.0]),
     ("ur5_tilted", [219.6, 221.7, 5.5, -154.2, 0.0, -84.0]),
+    # a nearly defective triple eigenvalue on which Francis's QR stalls (its window is split)
+    ("fanuc_crx10ia", [90.0, -90.0, 0.0, 180.0, 179.9, 180.0]),
+    # a moved pose whose companion's eigenvalues depend on rounding (solved by QZ)
+    ("ur5_tilted", [180.0, 90.0, -90.0, 90.0, -90.0, 0.0]),
 ]
 
 
@@ -342,6 +346,34 @@ def test_every_isolated_root_at_special_angles(name: str, degrees: list[float]) 
     assert len(regular[0]) == len(regular[1])
     d = np.abs(_wrap(regular[0][:, None] - regular[1][None])).max(axis=2)
     assert np.all(d.min(axis=1) <= 1e-9)
+
+
+#: Poses of `dhkin check` (seed 0: CRX-10iA uniform sample 2326, HC10DT near-singular sample
+#: 11016) whose root lies 1.8e-5 rad (CRX-10iA) and 1e-6 rad (HC10DT) in theta_2 from another
+#: root's: a nearly double eigenvalue of the companion, which a QR iteration resolves only to
+#: its backward error over the gap. Deflating the eigenvalues +-i by a constant orthogonal basis
+#: undid the companion's balancing (the deflated matrix's norm ~1e6 against ~50 balanced on the
+#: HC10DT pose) and scattered the pair by 3e-4 to 6e-4 rad: the root was lost.
+NEAR_DOUBLE_POSES = [
+    ("fanuc_crx10ia", [-1.3252076916882785, -1.9031331755445116, 2.2318910050791123,
+                       -1.8376890649785715, 3.1176090779758727, 3.0909496408603063]),
+    ("motoman_hc10dt", [2.023436611934426, -2.659816867168698, 3.62328207806369,
+                        -1.4919549505431418, -0.0, 1.0721349745253512]),
+]
+
+
+@pytest.mark.parametrize(("name", "q"), NEAR_DOUBLE_POSES)
+def test_nearly_double_eigenvalue_keeps_both_roots(name: str, q: list[float]) -> None:
+    """Unseeded, the answer at a pose made by Pinocchio from q (generated URDF) holds q."""
+    from dhkin.validation.multistart import missing_roots
+    from dhkin.validation.references import ReferenceSpec, TargetModel
+
+    robot = dhkin.load(name)
+    model = TargetModel(ReferenceSpec(kind="exact"), robot.reference())
+    T = model.fk(np.array(q))
+    answer = robot.ik(T)
+    assert not missing_roots(model, T, np.array([q]), answer.q, DEFAULT_TOLERANCE, SAME)
+    assert len(answer) % 2 == 0
 
 
 def test_shared_eigenvalues_are_split_into_each_root() -> None:

@@ -6,10 +6,9 @@
 // whose matrix is conditioned within kLeadCondition becomes lead (else the best of them), so
 // that no root lies at infinity unless all four are roots. The eigenvalues come from the
 // companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp) where A is well
-// conditioned, else from QZ on the pencil (Eigen's real QZ: backward stable, it keeps the
-// eigenvalues of the regular part). Where no leading matrix is well
-// conditioned, or a cluster holds more than kMaxSplit eigenvalues, the pose is solved moved
-// (all_candidates).
+// conditioned, else from QZ on the 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps
+// the eigenvalues of the regular part). Where no leading matrix is well conditioned, or a cluster holds more than kMaxSplit
+// eigenvalues, the pose is solved moved (all_candidates), by QZ.
 #pragma once
 
 #include <Eigen/Dense>
@@ -24,6 +23,7 @@
 #include "dhkin/general6r/eigenvalues.hpp"
 #include "dhkin/general6r/elimination.hpp"
 #include "dhkin/general6r/null_space.hpp"
+#include "dhkin/general6r/right_side.hpp"
 
 namespace dhkin::general6r {
 
@@ -42,8 +42,6 @@ constexpr double kLeadCondition = 1e-8;
 constexpr double kCluster = 1e-3;
 // Beyond this size an eigenvalue is infinite (theta_k = lead + pi to the last bit).
 constexpr double kInfinite = 1e150;
-// Rows of Q whose singular value is below this fraction of the largest are its null space.
-constexpr double kRankFraction = 1e-10;
 
 // Where a start comes from (bits): a near-real complex pair of eigenvalues (its imaginary angle
 // beyond kCluster, within the band); a cluster of eigenvalues (its root's fold partner is
@@ -107,12 +105,18 @@ struct Angle {
 
 // The starts of every root the eigenproblem of T_dh (DH frame 0 -> DH frame 6 of the exact
 // chain) holds, appended to `out`; none where the leading matrix is ill-conditioned unless
-// `solve_ill` (QZ on the pencil then). Near-real eigenvalues (angle's imaginary part within the
-// band) whose angles lie within kCluster of each other are one cluster of m: at each distinct
-// member the m-dimensional null space of M is split into one monomial vector per root (m = 1:
-// inverse iteration), and each vector's joints are back-substituted.
+// `solve_ill` (QZ on the pencil then). A `moved` pose (all_candidates) is solved by QZ whatever
+// its leading matrix's condition: it lies within the move of a pose whose matrix polynomial is
+// singular, or nearly, so the companion's A^-1 (reciprocal condition 1.4e-7 on a tilted-UR5
+// special pose) amplifies rounding into its eigenvalues (1e-4 apart between two QR codes there,
+// two roots' eigenvalues 1.8e-3 apart: one's null vector came out a mixture, its start 0.4 rad
+// off, and which root was lost depended on rounding), while QZ stays backward stable (that
+// start: 1e-3 rad off, the size of the move). Near-real eigenvalues (angle's imaginary part
+// within the band) whose angles lie within kCluster of each other are one cluster of m: at each
+// distinct member the m-dimensional null space of M is split into one monomial vector per root
+// (m = 1: inverse iteration), and each vector's joints are back-substituted.
 inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool solve_ill,
-                                  std::vector<Start>& out) {
+                                  std::vector<Start>& out, bool moved = false) {
   using namespace candidates_detail;
   EliminationInfo info;
   const Frame target = el.reversed ? inverse(T_dh) : T_dh;
@@ -128,23 +132,8 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   Right right;
   right.Q = G.topRows<8>().transpose();
   right.r = G.row(8).transpose();
-  const Eigen::JacobiSVD<RightSide> svd(right.Q, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const auto& sv = svd.singularValues();
-  right.rank = 0;
-  for (int i = 0; i < 8; ++i) right.rank += sv(i) > sv(0) * kRankFraction ? 1 : 0;
-  right.pseudo_inverse.setZero();
-  for (int i = 0; i < right.rank; ++i) {
-    right.pseudo_inverse += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / sv(i);
-  }
-  // rows N with N Q = 0 eliminate the right side's products: six (a generic mix where more)
-  const int null_rows = kQuantities - right.rank;
-  Eigen::Matrix<double, 6, kQuantities> N;
-  const auto left_null = svd.matrixU().rightCols(null_rows).transpose();
-  if (null_rows > 6) {
-    N = el.mix.leftCols(null_rows) * left_null;
-  } else {
-    N = left_null;
-  }
+  EliminatingRows N;  // N Q = 0: they eliminate the right side's products
+  factor_right(el, right, N);
   const Rows6 Pc = N * el.P[0], Ps = N * el.P[1];
   Rows6 P1 = N * el.P[2];
   P1.col(8) -= N * right.r;
@@ -167,12 +156,8 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   const Matrix12 B = stacked(2.0 * (Ps * cs - Pc * sn) * el.half2);
   const Matrix12 C = M_at(lead);
   Eigenvalues eigenvalues;
-  if (best >= kLeadCondition) {
-    Matrix24 companion = Matrix24::Zero();
-    companion.topRightCorner<kMonomials, kMonomials>().setIdentity();
-    companion.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
-    companion.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
-    if (!matrix_eigenvalues(companion, eigenvalues)) return info;
+  if (best >= kLeadCondition && !moved) {
+    if (!companion_eigenvalues(A_inverse, B, C, eigenvalues)) return info;
   } else {
     if (!solve_ill) return info;
     Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();
@@ -231,7 +216,7 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
 // candidates() of T_dh; where its eigenproblem is ill-conditioned (the matrix polynomial is
 // singular, or nearly, at this pose) instead, and where an eigenvalue is degenerate (a curve of
 // solutions at one value of the eliminated joint) as well, those of the pose moved by
-// moves.motion(1), whose eigenproblem is regular (solved by QZ where still ill-conditioned) with
+// moves.motion(1), whose eigenproblem is regular (solved by QZ, backward stable) with
 // simple eigenvalues: every real root of the moved pose is among its eigenvalues, and every
 // regular root of T_dh lies near one of them (docs/general6r.md, "Every root"). With the moved
 // pose, the fallback starts are starts too: near a highly degenerate singular set (a stretched
@@ -244,7 +229,7 @@ inline bool all_candidates(const Elimination& el, const Moves& moves, const Fram
   if (std::isnan(info.lead_condition)) return false;
   if (info.lead_condition >= kLeadCondition && !info.degenerate) return false;
   const std::size_t first = out.size();
-  candidates(el, moves.motion(1.0) * T_dh, true, out);
+  candidates(el, moves.motion(1.0) * T_dh, true, out, true);
   for (std::size_t i = first; i < out.size(); ++i) out[i].origin |= kMoved;
   if (fallback) {
     for (const Joints& q : moves.fallback) out.push_back({q, 0});

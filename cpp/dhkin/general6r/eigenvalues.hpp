@@ -1,8 +1,9 @@
-// The eigenvalues of the general 6R elimination's 24 x 24 companion matrix and pencil.
+// The eigenvalues of the general 6R elimination's companion matrix and pencil.
 //
-// A real matrix: balanced (as LAPACK's dgeev does first), then Eigen's EigenSolver (Hessenberg
-// reduction, Francis double-shift QR), eigenvalues only. A pencil: Eigen's real QZ
-// (GeneralizedEigenSolver).
+// The companion K = [[0, I], [X, Y]] (X = -A^-1 C, Y = -A^-1 B, 24 x 24), balanced (as
+// LAPACK's dgeev does first), reduced to Hessenberg form, then Francis's double-shift QR,
+// eigenvalues only (hessenberg_qr.hpp). A pencil: Eigen's real QZ (GeneralizedEigenSolver) on the
+// whole 24 x 24.
 #pragma once
 
 #include <Eigen/Dense>
@@ -12,11 +13,9 @@
 #include <complex>
 
 #include "dhkin/general6r/elimination.hpp"
+#include "dhkin/general6r/hessenberg_qr.hpp"
 
 namespace dhkin::general6r {
-
-using Matrix24 = Eigen::Matrix<double, kEigenvalues, kEigenvalues>;
-using Eigenvalues = Eigen::Matrix<std::complex<double>, kEigenvalues, 1>;
 
 namespace eigenvalues_detail {
 
@@ -25,17 +24,17 @@ constexpr double kRadix = 2.0;
 // A row and column pair is rescaled when that shrinks their combined norm below this fraction.
 constexpr double kBalanceGain = 0.95;
 
-// K balanced in place by a diagonal similarity D^-1 K D (Parlett and Reinsch, as LAPACK's
-// dgebal, which dgeev runs first): each row and its column brought to comparable norms by
-// powers of two. The eigenvalues are K's; their computed accuracy is not: the companion of a
-// badly scaled M(x) unbalanced lost two real roots 5.5e-11 apart (a CRX-10iA pose at a joint
-// limit) into one complex pair, balanced it keeps them apart.
-inline void balance(Matrix24& K) {
+// K (its leading n x n block) balanced in place by a diagonal similarity D^-1 K D (Parlett and
+// Reinsch, as LAPACK's dgebal, which dgeev runs first): each row and its column brought to
+// comparable norms by powers of two. The eigenvalues are K's; their computed accuracy is not:
+// the companion of a badly scaled M(x) unbalanced lost two real roots 5.5e-11 apart (a CRX-10iA
+// pose at a joint limit) into one complex pair, balanced it keeps them apart.
+inline void balance(Matrix24& K, int n) {
   for (bool done = false; !done;) {
     done = true;
-    for (int i = 0; i < kEigenvalues; ++i) {
+    for (int i = 0; i < n; ++i) {
       double column = 0.0, row = 0.0;
-      for (int j = 0; j < kEigenvalues; ++j) {
+      for (int j = 0; j < n; ++j) {
         if (j == i) continue;
         column += std::abs(K(j, i));
         row += std::abs(K(i, j));
@@ -47,8 +46,8 @@ inline void balance(Matrix24& K) {
       for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
       if ((column + row) / factor < kBalanceGain * total) {
         done = false;
-        K.row(i) /= factor;
-        K.col(i) *= factor;
+        for (int j = 0; j < n; ++j) K(i, j) /= factor;
+        for (int j = 0; j < n; ++j) K(j, i) *= factor;
       }
     }
   }
@@ -56,14 +55,27 @@ inline void balance(Matrix24& K) {
 
 }  // namespace eigenvalues_detail
 
-// The eigenvalues of K (balanced in place first); false where the QR iteration does not
-// converge.
-inline bool matrix_eigenvalues(Matrix24& K, Eigenvalues& out) {
-  eigenvalues_detail::balance(K);
-  const Eigen::EigenSolver<Matrix24> eigen(K, false);
-  if (eigen.info() != Eigen::Success) return false;
-  out = eigen.eigenvalues();
-  return true;
+// The eigenvalues of K's leading n x n block (balanced in place first, then destroyed) into
+// out(0 .. n-1); false where the QR iteration does not converge.
+inline bool matrix_eigenvalues(Matrix24& K, int n, Eigenvalues& out) {
+  eigenvalues_detail::balance(K, n);
+  reduce_to_hessenberg(K, n);
+  return hessenberg_eigenvalues(K, n, out);
+}
+
+// The eigenvalues of the companion of M(x) = A x^2 + B x + C (A_inverse = A^-1) into out; false
+// where the QR iteration does not converge. The whole 24 x 24 companion is solved, its eigenvalues
+// +-i included (docs/general6r.md, "Speed": deflating them by a constant orthogonal basis, 16 x
+// 16, undid the balancing, whose diagonal similarity is the pose's: on an HC10DT pose the deflated
+// matrix's norm was 1e6 against 47 balanced, and a nearly double eigenvalue, two roots 1e-6 rad
+// apart, scattered by 6e-4 rad and a root was lost).
+inline bool companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, const Matrix12& C,
+                                  Eigenvalues& out) {
+  Matrix24 K = Matrix24::Zero();
+  K.topRightCorner<kMonomials, kMonomials>().setIdentity();
+  K.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
+  K.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
+  return matrix_eigenvalues(K, kEigenvalues, out);
 }
 
 // The eigenvalues of the pencil L - x R (an infinite one, beta = 0, as infinity); false where QZ

@@ -69,32 +69,30 @@ inline void lu_factor(Matrix12& M, std::array<int, kMonomials>& pivots) {
   const double tiny = std::max(M.cwiseAbs().maxCoeff() * std::numeric_limits<double>::epsilon(),
                                1e-300);
   for (int k = 0; k < kMonomials; ++k) {
-    int p = k;
-    for (int i = k + 1; i < kMonomials; ++i) {
-      if (std::abs(M(i, k)) > std::abs(M(p, k))) p = i;
-    }
-    pivots[k] = p;
-    if (p != k) M.row(k).swap(M.row(p));
+    const int below = kMonomials - 1 - k;
+    Eigen::Index p = 0;
+    M.col(k).tail(below + 1).cwiseAbs().maxCoeff(&p);
+    pivots[k] = k + static_cast<int>(p);
+    if (pivots[k] != k) M.row(k).swap(M.row(pivots[k]));
     if (M(k, k) == 0.0) M(k, k) = tiny;
-    for (int i = k + 1; i < kMonomials; ++i) {
-      const double factor = M(i, k) / M(k, k);
-      M(i, k) = factor;
-      for (int j = k + 1; j < kMonomials; ++j) M(i, j) -= factor * M(k, j);
-    }
+    if (below == 0) break;
+    M.col(k).tail(below) /= M(k, k);
+    M.bottomRightCorner(below, below).noalias() -=
+        M.col(k).tail(below) * M.row(k).tail(below);
   }
 }
 
-// v <- M^-1 v from lu_factor's factors.
+// v <- M^-1 v from lu_factor's factors (column by column: contiguous in Eigen's storage).
 inline void lu_solve(const Matrix12& LU, const std::array<int, kMonomials>& pivots, Vector12& v) {
   for (int k = 0; k < kMonomials; ++k) {
     if (pivots[k] != k) std::swap(v(k), v(pivots[k]));
   }
-  for (int i = 0; i < kMonomials; ++i) {
-    for (int j = 0; j < i; ++j) v(i) -= LU(i, j) * v(j);
+  for (int k = 0; k + 1 < kMonomials; ++k) {
+    v.tail(kMonomials - 1 - k) -= v(k) * LU.col(k).tail(kMonomials - 1 - k);
   }
   for (int i = kMonomials - 1; i >= 0; --i) {
-    for (int j = i + 1; j < kMonomials; ++j) v(i) -= LU(i, j) * v(j);
     v(i) /= LU(i, i);
+    if (i > 0) v.head(i) -= v(i) * LU.col(i).head(i);
   }
 }
 

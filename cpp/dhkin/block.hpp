@@ -13,6 +13,7 @@
 #include <new>
 
 #include "dhkin/direct.hpp"
+#include "dhkin/known_turns.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/simd.hpp"
 
@@ -63,8 +64,21 @@ struct FrameColumns {
   }
 };
 
-// Whether a and b hold the same bits in every lane.
-DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_of(a) != bits_of(b)); }
+// Bound on wrap's rounding (angles.hpp) of a difference of two values within [-pi, pi]: it
+// takes off one whole turn whose head is exact, so its result is within ~1e-15 rad of a - b -+ 2pi;
+// this bound is a thousand times that.
+constexpr double kWrapRounding = 1e-12;
+
+// Lanes where joint values a and b surely differ by more than `distance` (mod 2pi for a revolute
+// joint), by a test without wrap: |a - b| beyond distance + kWrapRounding and, for revolute values
+// within [-pi, pi], short of 2pi - distance - kWrapRounding. Plan::same finds these lanes apart
+// too; the others it decides.
+DHKIN_INLINE Mask surely_apart(const Lanes& a, const Lanes& b, bool revolute, double distance) {
+  const Lanes d = abs(a - b);
+  const Mask beyond = d > distance + kWrapRounding;
+  if (!revolute) return beyond;
+  return beyond && d < kTwoPi - distance - kWrapRounding && abs(a) <= kPi && abs(b) <= kPi;
+}
 
 }  // namespace block
 
@@ -75,11 +89,12 @@ DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_o
 // with the bits of an earlier branch's, in every lane, takes that branch's sine and cosine, and a
 // branch whose first k joint values are an earlier branch's starts from that branch's frame after
 // k joints; the frames advance joint by joint for all branches together. The same operations on
-// the same values as check() per branch, so the same bits.
+// the same values as check() per branch, so the same bits. A sine and cosine the closed form
+// computed at the same angle (`known`, known_turns.hpp) is taken from there: the same bits again.
 inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
                            const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
+                           const KnownTurnsT<Lanes>& known,
                            std::array<PoseErrorT<Lanes>, kBranches>& errors) {
-  using block::same_bits;
   const ChainShape shape(chain);
   const int n = chain.dof();
   std::array<JointMotions<Lanes>, kBranches> motions;
@@ -103,7 +118,13 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
         if (wanted[a] && same_bits(q[a][j], q[b][j])) from = a;
       }
       if (from < 0) {
-        joint_motion(chain, j, q[b][j], motions[b]);
+        const ChainJoint& joint = chain.joints[j];
+        const Lanes variable = joint.motion(q[b][j]);  // joint_motion's
+        if (joint.revolute && known_sincos(known, b, j, variable, motions[b].turn[j])) {
+          motions[b].variable[j] = variable;
+        } else {
+          joint_motion(chain, j, q[b][j], motions[b]);
+        }
       } else {  // joint_motion's outputs: the variable, and the turn of a revolute joint
         motions[b].variable[j] = motions[from].variable[j];
         if (chain.joints[j].revolute) motions[b].turn[j] = motions[from].turn[j];
@@ -165,7 +186,8 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   FrameT<Lanes> T_dh;
   targets_of(frames, projected, T_dh, out.T_at);
   CandidatesT<Lanes> found;
-  plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
+  KnownTurnsT<Lanes> known;
+  plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found, -1, false, &known);
   out.why = found.why;
   for (int b = 0; b < kBranches; ++b) declined = declined || (found.near[b] & kFree) != 0;
   std::array<bool, kBranches> wanted{};
@@ -178,16 +200,21 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
     // lanes without a candidate are checked on zeros (finite values; their errors are not used)
     for (int j = 0; j < kDof && wanted[b]; ++j) q[j] = select(abs(q[j]) < INFINITY, q[j], Lanes(0.0));
   }
-  check_branches(plan.chain, out.q, wanted, out.T_at, out.errors);
+  check_branches(plan.chain, out.q, wanted, out.T_at, known, out.errors);
   for (int b = 0; b < kBranches; ++b) {
     declined = declined || (out.ok[b] && !out.errors[b].within(tolerance));
   }
+  // one solution from two branches: the pipeline merges them (plan.same, for the lanes a cheaper
+  // test does not find apart)
+  const double merge_distance = 2.0 * kMergeAngle;
   for (int a = 0; a < kBranches; ++a) {
     for (int b = a + 1; b < kBranches; ++b) {
-      const Mask both = out.ok[a] && out.ok[b] && !declined;
-      if (any(both)) {  // one solution from two branches: the pipeline merges them
-        declined = declined || (both && plan.same(out.q[a], out.q[b], 2.0 * kMergeAngle));
+      Mask maybe = out.ok[a] && out.ok[b] && !declined;
+      for (int j = 0; j < kDof && any(maybe); ++j) {
+        maybe = maybe && !block::surely_apart(out.q[a][j], out.q[b][j], plan.revolute(j),
+                                              merge_distance);
       }
+      if (any(maybe)) declined = declined || (maybe && plan.same(out.q[a], out.q[b], merge_distance));
     }
   }
   for (int b = 0; b < kBranches; ++b) {

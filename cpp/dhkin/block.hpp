@@ -13,7 +13,6 @@
 #include <new>
 
 #include "dhkin/direct.hpp"
-#include "dhkin/known_turns.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/simd.hpp"
 
@@ -64,6 +63,9 @@ struct FrameColumns {
   }
 };
 
+// Whether a and b hold the same bits in every lane.
+DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_of(a) != bits_of(b)); }
+
 // Bound on wrap's rounding (angles.hpp) of a difference of two values within [-pi, pi]: it
 // takes off one whole turn whose head is exact, so its result is within ~1e-15 rad of a - b -+ 2pi;
 // this bound is a thousand times that.
@@ -89,12 +91,11 @@ DHKIN_INLINE Mask surely_apart(const Lanes& a, const Lanes& b, bool revolute, do
 // with the bits of an earlier branch's, in every lane, takes that branch's sine and cosine, and a
 // branch whose first k joint values are an earlier branch's starts from that branch's frame after
 // k joints; the frames advance joint by joint for all branches together. The same operations on
-// the same values as check() per branch, so the same bits. A sine and cosine the closed form
-// computed at the same angle (`known`, known_turns.hpp) is taken from there: the same bits again.
+// the same values as check() per branch, so the same bits.
 inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
                            const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
-                           const KnownTurnsT<Lanes>& known,
                            std::array<PoseErrorT<Lanes>, kBranches>& errors) {
+  using block::same_bits;
   const ChainShape shape(chain);
   const int n = chain.dof();
   std::array<JointMotions<Lanes>, kBranches> motions;
@@ -118,13 +119,7 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
         if (wanted[a] && same_bits(q[a][j], q[b][j])) from = a;
       }
       if (from < 0) {
-        const ChainJoint& joint = chain.joints[j];
-        const Lanes variable = joint.motion(q[b][j]);  // joint_motion's
-        if (joint.revolute && known_sincos(known, b, j, variable, motions[b].turn[j])) {
-          motions[b].variable[j] = variable;
-        } else {
-          joint_motion(chain, j, q[b][j], motions[b]);
-        }
+        joint_motion(chain, j, q[b][j], motions[b]);
       } else {  // joint_motion's outputs: the variable, and the turn of a revolute joint
         motions[b].variable[j] = motions[from].variable[j];
         if (chain.joints[j].revolute) motions[b].turn[j] = motions[from].turn[j];
@@ -186,8 +181,7 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   FrameT<Lanes> T_dh;
   targets_of(frames, projected, T_dh, out.T_at);
   CandidatesT<Lanes> found;
-  KnownTurnsT<Lanes> known;
-  plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found, -1, false, &known);
+  plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
   out.why = found.why;
   for (int b = 0; b < kBranches; ++b) declined = declined || (found.near[b] & kFree) != 0;
   std::array<bool, kBranches> wanted{};
@@ -200,7 +194,7 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
     // lanes without a candidate are checked on zeros (finite values; their errors are not used)
     for (int j = 0; j < kDof && wanted[b]; ++j) q[j] = select(abs(q[j]) < INFINITY, q[j], Lanes(0.0));
   }
-  check_branches(plan.chain, out.q, wanted, out.T_at, known, out.errors);
+  check_branches(plan.chain, out.q, wanted, out.T_at, out.errors);
   for (int b = 0; b < kBranches; ++b) {
     declined = declined || (out.ok[b] && !out.errors[b].within(tolerance));
   }

@@ -25,7 +25,6 @@
 #include "dhkin/family.hpp"
 #include "dhkin/frame.hpp"
 #include "dhkin/golden.hpp"
-#include "dhkin/known_turns.hpp"
 
 namespace dhkin {
 
@@ -149,7 +148,6 @@ inline double kept_in_reach(const OffsetGeometry& g, const Frame& T_home, const 
 template <class V>
 struct ElbowRoot {
   V q2{}, q3{}, q4{};
-  SinCosT<V> turn3{};  // sincos(q3)
   MaskOf<V> valid{};
   BitsOf<V> flag{}, near{};
 };
@@ -164,32 +162,56 @@ struct ElbowSetup {
   V total{};  // angle about n of G plane_x from plane_x
 };
 
-// `reach_side`: a double, or per lane (the branches of one pose in lanes, branch_lanes.hpp).
+// The elbow setups of N motions G (turns[a], span[a] = |arm|), step by step, each step for every
+// motion before the next (independent work the processor overlaps); each one's values are
+// computed as they would be for it alone. `reach_side`: doubles, or per lane (the branches of one
+// pose in lanes, branch_lanes.hpp).
+template <int N, class V, class R>
+DHKIN_INLINE void elbow_setups(const OffsetGeometry& g, const FrameT<V>& T_home,
+                               const TurnsT<V>* turns, const V* span, const R* reach_side,
+                               double clamp, ElbowSetup<V>* out) {
+  const double L2 = g.upper_length, L3 = g.forearm_length;
+  const double low = std::abs(L2 - L3), high = L2 + L3;
+  V root[N], kappa[N], first[N], second[N];
+  SinCosT<V> f[N];
+  for (int a = 0; a < N; ++a) {
+    out[a].total = plane_angle(g, motion_apply(g, T_home, turns[a], g.plane_x, false));
+  }
+  for (int a = 0; a < N; ++a) {
+    const V outer = high - span[a], inner = span[a] - low;
+    out[a].reach_ok = outer >= -clamp && inner >= -clamp;
+    out[a].clamped = outer < 0.0 || inner < 0.0;
+    // (L2 L3)^2 - kappa^2 in factored form: accurate near both boundaries
+    root[a] = sqrt(max(outer, V(g.spread)) * (high + span[a]) * max(inner, V(g.spread)) *
+                   (span[a] + low)) / 2.0;
+    kappa[a] = (span[a] * span[a] - L2 * L2 - L3 * L3) / 2.0;
+  }
+  for (int a = 0; a < N; ++a) {
+    out[a].merged = small_angle(root[a], abs(kappa[a]), kMergeAngle);
+    root[a] = select(out[a].merged, V(0.0), root[a]);
+    out[a].flag = bits_if(out[a].merged || root[a] <= kFlagBand * L2 * L3, kElbow);
+  }
+  for (int a = 0; a < N; ++a) {
+    const V half = atan2(root[a], kappa[a]);
+    first[a] = g.elbow_base + half, second[a] = g.elbow_base - half;
+  }
+  for (int a = 0; a < N; ++a) f[a] = sincos(first[a]);
+  for (int a = 0; a < N; ++a) {
+    const V turn = f[a].c * g.elbow_turn + g.sign3 * f[a].s * g.elbow_alpha;
+    const auto swap = select(turn >= 0.0, V(1.0), V(-1.0)) != V(reach_side[a]);
+    out[a].q3[0] = select(swap, second[a], first[a]);
+    out[a].q3[1] = select(swap, first[a], second[a]);
+  }
+}
+
+// What both elbow branches of one motion G share (elbow_setups above).
 template <class V, class R>
 DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
                                        const TurnsT<V>& turns, V span, R reach_side,
                                        double clamp) {
-  const double L2 = g.upper_length, L3 = g.forearm_length;
-  const double low = std::abs(L2 - L3), high = L2 + L3;
-  const V outer = high - span, inner = span - low;
-  ElbowSetup<V> out;
-  out.reach_ok = outer >= -clamp && inner >= -clamp;
-  out.clamped = outer < 0.0 || inner < 0.0;
-  // (L2 L3)^2 - kappa^2 in factored form: accurate near both boundaries
-  V root = sqrt(max(outer, V(g.spread)) * (high + span) * max(inner, V(g.spread)) *
-                (span + low)) / 2.0;
-  const V kappa = (span * span - L2 * L2 - L3 * L3) / 2.0;
-  out.merged = small_angle(root, abs(kappa), kMergeAngle);
-  root = select(out.merged, V(0.0), root);
-  out.flag = bits_if(out.merged || root <= kFlagBand * L2 * L3, kElbow);
-  const V half = atan2(root, kappa);
-  const V first = g.elbow_base + half, second = g.elbow_base - half;
-  const SinCosT<V> f = sincos(first);
-  const V turn = f.c * g.elbow_turn + g.sign3 * f.s * g.elbow_alpha;
-  const auto swap = select(turn >= 0.0, V(1.0), V(-1.0)) != V(reach_side);
-  out.q3[0] = select(swap, second, first), out.q3[1] = select(swap, first, second);
-  out.total = plane_angle(g, motion_apply(g, T_home, turns, g.plane_x, false));
-  return out;
+  ElbowSetup<V> out[1];
+  elbow_setups<1>(g, T_home, &turns, &span, &reach_side, clamp, out);
+  return out[0];
 }
 
 // The same, for the arm's target point (span = |arm|).
@@ -210,7 +232,6 @@ DHKIN_INLINE ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& se
   out.flag = setup.flag;
   out.q3 = setup.q3[e];
   const SinCosT<V> t3 = sincos(out.q3);
-  out.turn3 = t3;
   const Vec3T<V> bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
   out.near = bits_if(norm_at_most(bent, request.seed_length), kElbow);
   const auto seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
@@ -297,12 +318,10 @@ inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const S
 
 }  // namespace offset
 
-// The 8 branches of the offset-wrist family for target T, DH frame 0 -> 6; with `known`, the
-// sines and cosines computed at q1, q3, -q5 and -q6 of each branch go there too.
+// The 8 branches of the offset-wrist family for target T, DH frame 0 -> 6.
 template <class V>
 inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
-                               const FamilyRequestT<V>& request, CandidatesT<V>& out,
-                               KnownTurnsT<V>* known = nullptr) {
+                               const FamilyRequestT<V>& request, CandidatesT<V>& out) {
   using namespace offset;
   const JointsT<V>& seed = *request.seed;
   const FrameT<V> T_home = T * g.home_inverse;
@@ -402,10 +421,8 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
     out.why[2 + k] = span[k];
   }
   ElbowSetup<V> setup[4];
-  for (int k = 0; k < 4; ++k) {
-    const double reach_side = k / 2 == 0 ? g.lateral_sign : -g.lateral_sign;
-    setup[k] = elbow_setup(g, T_home, turns[k], span[k], reach_side, request.clamp);
-  }
+  const double reach_side[4] = {g.lateral_sign, g.lateral_sign, -g.lateral_sign, -g.lateral_sign};
+  elbow_setups<4>(g, T_home, turns, span, reach_side, request.clamp, setup);
   ElbowRoot<V> roots[kBranches];
   for (int b = 0; b < kBranches; ++b) {
     const int k = 2 * (b / 4) + b % 2, e = (b / 2) % 2;
@@ -420,12 +437,6 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
     out.valid[b] = q1_valid[s] && wrist_valid && r.valid;
     out.flags[b] = shoulder_flag | wrist_flag[s] | r.flag;
     out.near[b] = shoulder_near | wrist_near[s] | r.near;
-    if (known != nullptr) {
-      known->put(b, 0, q1[s], t1[s]);
-      known->put(b, 2, r.q3, r.turn3);
-      known->put(b, 4, -q5[k], minus_q5[k]);
-      known->put(b, 5, -q6[k], turns[k].q6);
-    }
   }
   for (int k = 0; k < 4; ++k) {
     const int s = k / 2, w = k % 2;

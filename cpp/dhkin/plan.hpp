@@ -89,18 +89,15 @@ struct Plan {
 
   // The family's closed form for target T (DH frame 0 -> n); per lane for V = Lanes.
   // `only_branch` and `at_seed`: which seeded member is searched, and how (FamilyRequest).
-  // `known`: where the sines and cosines the closed form computed at joint values go (the
-  // wrist families; known_turns.hpp).
   template <class V>
   void solve_family(const FrameT<V>& T, const JointsT<V>& seed, int use_seed, double clamp,
-                    CandidatesT<V>& out, int only_branch = -1, bool at_seed = false,
-                    KnownTurnsT<V>* known = nullptr) const {
+                    CandidatesT<V>& out, int only_branch = -1, bool at_seed = false) const {
     const FamilyRequestT<V> request{&seed,       use_seed,    seed_angle, seed_length,
                                     clamp,       only_branch, at_seed};
     switch (family) {
-      case Family::spherical_wrist: solve_spherical_wrist(spherical, T, request, out, known); break;
+      case Family::spherical_wrist: solve_spherical_wrist(spherical, T, request, out); break;
       case Family::stanford: solve_stanford(spherical, T, request, out); break;
-      case Family::offset_wrist: solve_offset_wrist(offset, T, request, out, known); break;
+      case Family::offset_wrist: solve_offset_wrist(offset, T, request, out); break;
     }
   }
 

@@ -23,7 +23,6 @@
 #include "dhkin/bands.hpp"
 #include "dhkin/family.hpp"
 #include "dhkin/frame.hpp"
-#include "dhkin/known_turns.hpp"
 
 namespace dhkin {
 
@@ -101,7 +100,6 @@ DHKIN_INLINE ShoulderRoots<V> shoulder(const SphericalGeometry& g, const FrameT<
 template <class V>
 struct TargetColumns {
   Vec3T<V> first, last;
-  SinCosT<V> turn1;  // sincos(turn1)
 };
 
 template <class V>
@@ -109,7 +107,7 @@ DHKIN_INLINE TargetColumns<V> target_columns(const SphericalGeometry& g, const F
   const SinCosT<V> t = sincos(turn1);
   const Vec3T<V> k0 = T.rotate(g.target_to_wrist.column(0));
   const Vec3T<V> k2 = T.rotate(g.target_to_wrist.column(2));
-  return {rotate_about(g.up, t.c, -t.s, k0), rotate_about(g.up, t.c, -t.s, k2), t};
+  return {rotate_about(g.up, t.c, -t.s, k0), rotate_about(g.up, t.c, -t.s, k2)};
 }
 
 // Columns 0 and 2 of H = F^T R23^T K1 (below) for an arm turned by turn23 (t23: its sine and
@@ -131,8 +129,6 @@ DHKIN_INLINE WristColumns<V> wrist_columns(const SphericalGeometry& g,
 template <class V>
 struct WristRoots {
   V q[2][3] = {};
-  V angles[2][2] = {};            // t4 and t5 of each wrist branch
-  SinCosT<V> turns[2][2] = {};    // their sines and cosines
   BitsOf<V> flag{}, near{};
 };
 
@@ -153,6 +149,7 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
                          const FamilyRequestT<V>& request, WristRoots<V>* roots) {
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
   SinCosT<V> t23[N], s_theta[N], s4[N][2];
+  V t4[N][2], t5[N][2];  // of each wrist branch
   WristColumns<V> h[N];  // columns 0 and 2 of H
   V sine[N], theta[N], alpha[N];
   MaskOf<V> seeded[N];
@@ -185,24 +182,21 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
   for (int a = 0; a < N; ++a) s_theta[a] = sincos(theta[a]);
   for (int a = 0; a < N; ++a) {
     for (int w = 0; w < 2; ++w) {
-      const V t4 = alpha[a] + (w == 1 ? select(seeded[a], V(0.0), V(kPi)) : V(0.0));
-      roots[a].angles[w][0] = t4;
-      roots[a].angles[w][1] = w == 0 ? theta[a] : -theta[a];  // t5
-      s4[a][w] = sincos(t4);
+      t4[a][w] = alpha[a] + (w == 1 ? select(seeded[a], V(0.0), V(kPi)) : V(0.0));
+      t5[a][w] = w == 0 ? theta[a] : -theta[a];
+      s4[a][w] = sincos(t4[a][w]);
     }
   }
   for (int a = 0; a < N; ++a) {
     const V h00 = h[a].h0.x, h10 = h[a].h0.y, h20 = h[a].h0.z;
     for (int w = 0; w < 2; ++w) {
-      const V t4 = roots[a].angles[w][0], t5 = roots[a].angles[w][1];
       const SinCosT<V> s5 = w == 0 ? s_theta[a] : negated(s_theta[a]);
       const SinCosT<V>& c4 = s4[a][w];
       // Ry(-t5) Rz(-t4) H = Rz(t6): t6 from its first column
       const V t6 =
           atan2(-c4.s * h00 + c4.c * h10, s5.c * (c4.c * h00 + c4.s * h10) - s5.s * h20);
-      roots[a].turns[w][0] = c4, roots[a].turns[w][1] = s5;
-      roots[a].q[w][0] = d4 * t4;
-      roots[a].q[w][1] = d5 * (t5 - g.tilt);
+      roots[a].q[w][0] = d4 * t4[a][w];
+      roots[a].q[w][1] = d5 * (t5[a][w] - g.tilt);
       roots[a].q[w][2] = d6 * t6;
     }
   }
@@ -240,12 +234,9 @@ DHKIN_INLINE V turn_to(const PlanarT<V>& target, const PlanarT<V>& point) {
 // The 8 branches of the spherical-wrist family for target T (DH frame 0 -> n). Elbow: with psi
 // the angle from upper arm to forearm, |target|^2 = L2^2 + L3^2 + 2 L2 L3 cos(psi);
 // t3 = psi - psi_0, t2 = arg(target) - arg(upper + exp(i t3) fore).
-// With `known`, the sines and cosines computed at turn1, turn3, t4 and t5 of each branch go there
-// too.
 template <class V>
 inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T,
-                                  const FamilyRequestT<V>& request, CandidatesT<V>& out,
-                                  KnownTurnsT<V>* known = nullptr) {
+                                  const FamilyRequestT<V>& request, CandidatesT<V>& out) {
   using namespace spherical;
   const JointsT<V>& seed = *request.seed;
   const ShoulderRoots<V> arm = shoulder(g, T, seed[0], request, out);
@@ -305,12 +296,6 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
     store(out, b, g.signs[0] * turn1[s], g.signs[1] * turn2[k], g.signs[2] * turn3[k], w[k], wb,
           arm_valid, arm.flag | elbow_flag[s] | w[k].flag,
           arm.near | elbow_near[s] | w[k].near | clamped[s]);
-    if (known != nullptr) {
-      known->put(b, 0, turn1[s], columns[s].turn1);
-      known->put(b, 2, turn3[k], t3[k]);
-      known->put(b, 3, w[k].angles[wb][0], w[k].turns[wb][0]);
-      known->put(b, 4, w[k].angles[wb][1], w[k].turns[wb][1]);
-    }
   }
 }
 

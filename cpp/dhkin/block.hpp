@@ -208,7 +208,9 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
         maybe = maybe && !block::surely_apart(out.q[a][j], out.q[b][j], plan.revolute(j),
                                               merge_distance);
       }
-      if (any(maybe)) declined = declined || (maybe && plan.same(out.q[a], out.q[b], merge_distance));
+      if (any(maybe)) {
+        declined = declined || (maybe && plan.same(out.q[a], out.q[b], merge_distance));
+      }
     }
   }
   for (int b = 0; b < kBranches; ++b) {

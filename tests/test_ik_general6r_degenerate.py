@@ -36,7 +36,7 @@ import dhkin
 from dhkin.validation.multistart import ISOLATED, RootReference, missing_roots
 from dhkin.validation.references import TargetModel, target_model
 
-from .conftest import REFERENCE_URDFS
+from .conftest import REFERENCE_URDFS, oracle_errors
 
 TOLERANCE = 1e-9
 JOINT_TOLERANCE = 1e-6
@@ -68,6 +68,51 @@ M430_POSES = [  # degrees
     (90, -90, 180, 90, 0, 0), (90, -90, 180, 180, 90, -90), (90, -90, 180, 180, 90, 90),
     (90, -90, 180, 180, 90, 180), (90, 90, 180, -90, 0, 0), (90, 90, 180, -90, 0, 90),
     (90, 90, 180, 90, -90, 180), (90, 90, 180, 90, 90, 180)]
+#: Special poses of the HC10 (degrees) and the signs of the seed's moves (+-0.05 rad; 0 where the
+#: joint sits on a limit) on which `dhkin validate motoman_hc10 -n 3000` (seed 0, its default
+#: reference: the generated URDF rounded to 10 significant digits, 1.1e-9 rad from the table)
+#: found the answer discontinuous in the seed: a curve of solutions of the table is, at the
+#: rounded target, a valley whose floor misses it by far less than the tolerance, and Newton slid
+#: the seed's member along the floor to an isolated root 0.5-1.6 rad away.
+HC10_ROUNDED_POSES = [
+    ((-90, 180, 0, 90, -90, 180), (1, -1, -1, 1, -1, -1)),
+    ((-90, 180, 0, 0, 90, 180), (-1, -1, -1, 1, 1, -1)),
+    ((0, 0, 0, -90, -90, 180), (1, 1, 1, 1, 1, 0)),
+    ((0, 180, 0, 90, 180, 0), (-1, 0, 1, 1, 0, 1)),
+    ((90, 180, 180, 90, 90, -90), (1, -1, 1, 1, 1, 1)),
+    ((0, 0, 180, -90, 90, 180), (-1, 1, 1, 1, -1, 0)),
+    ((90, 180, 0, 90, 180, 0), (-1, -1, -1, -1, 0, -1)),
+    ((90, 0, 0, -90, -90, 0), (1, 1, -1, -1, 1, 1)),
+    ((90, 180, 180, -90, 90, 90), (-1, -1, -1, 1, -1, 1)),
+    ((180, 0, 0, -90, 90, -90), (-1, -1, -1, 1, -1, 1)),
+    ((0, 180, 180, 0, -90, 0), (-1, 0, -1, 1, -1, -1)),
+    ((-90, 0, 180, 90, 90, -90), (-1, 1, 1, 1, 1, 1)),
+    ((180, 0, 0, -90, -90, -90), (0, 1, 1, -1, -1, -1)),
+    ((-90, 0, 180, -90, 90, -90), (-1, -1, -1, 1, 1, 1)),
+    ((0, 0, 0, 90, 90, 90), (-1, -1, 1, 1, -1, 1)),
+    ((-90, 0, 180, 90, -90, -90), (1, 1, 1, 1, -1, -1)),
+    ((180, 0, 180, -90, -90, -90), (-1, 1, 1, -1, -1, -1)),
+    ((90, 180, 180, 90, -90, 0), (1, 0, -1, 1, -1, -1)),
+    ((90, 180, 180, 90, 90, 90), (-1, -1, 1, -1, -1, -1)),
+    ((90, 180, 180, 90, 180, 180), (-1, 0, -1, 1, 0, 0)),
+    ((90, 180, 0, 90, 180, 90), (1, -1, -1, -1, -1, 1)),
+    ((90, 0, 180, 0, 90, 0), (1, -1, 1, 1, 1, 1)),
+    ((-90, 180, 0, 90, -90, -90), (1, -1, 1, -1, 1, -1)),
+    ((-90, 180, 0, 90, -90, -90), (-1, -1, -1, 1, -1, 1)),
+    ((180, 0, 0, 90, 180, -90), (-1, 1, -1, 1, -1, -1)),
+    ((90, 180, 0, -90, 90, -90), (-1, 0, 1, 1, 1, -1)),
+    ((180, 0, 180, 90, -90, 180), (-1, 1, -1, -1, 1, 0)),
+    ((0, 180, 0, -90, 90, 0), (1, 0, -1, -1, -1, -1)),
+    ((90, 180, 0, 90, 180, 0), (1, 0, 1, -1, -1, -1)),
+    ((-90, 0, 0, 90, -90, 90), (-1, 1, 1, 1, 1, -1)),
+    ((90, 0, 180, 90, 180, 90), (-1, -1, -1, -1, -1, -1)),
+    ((90, 180, 0, -90, 180, 180), (-1, 0, 1, -1, 0, -1)),
+    ((-90, 180, 0, 90, 180, 180), (1, -1, 1, -1, -1, 0)),
+    ((-90, 0, 180, -90, 180, 180), (-1, 1, 1, 1, 0, -1)),
+    ((180, 0, 0, -90, 90, 180), (0, -1, 1, 1, -1, 0)),
+    ((180, 0, 0, -90, 90, 180), (0, 1, 1, -1, 1, -1)),
+    ((0, 180, 0, 90, 180, 180), (-1, -1, 1, -1, 0, 0)),
+    ((90, 0, 180, 90, 90, 0), (-1, -1, 1, -1, -1, -1))]
 #: A uniform sample of `dhkin check` (vendor URDF, seed 0), 0.03 deg from the folded arm (rad).
 M430_NEAR_FOLD = [0.4367518501631453, 1.6872064241035578, -3.14109568853456, 1.4085820010929582,
                   0.9297584694111123, 1.1713092760715762]
@@ -134,3 +179,28 @@ def test_near_fold_roots_all_returned() -> None:
         answer = np.asarray(robot.ik(T).q).reshape(-1, 6)
         assert not missing_roots(model, T, reference, answer, TOLERANCE, JOINT_TOLERANCE)
         assert not check_pose(robot, model, RootReference(robot, model, starts=STARTS), q)
+
+
+def test_curve_members_follow_the_seed_on_a_rounded_description() -> None:
+    """Seeded with the sampled q or with the seed moved, a member of the curve near the seed comes
+    back (within the continuity distance), exact on the table (Pinocchio on the generated URDF).
+    The seed's member is moved along the curve and settled only across it (settle_across)."""
+    robot = dhkin.load("motoman_hc10")
+    model = target_model(robot, "rounded")
+    failures = []
+    for pose, signs in HC10_ROUNDED_POSES:
+        q = np.radians(pose)
+        T = model.fk(q)
+        moved = np.clip(q + PERTURBATION * np.array(signs), robot.lower, robot.upper)
+        for label, seed in (("q", q), ("moved", moved)):
+            answer = np.asarray(robot.ik(T, q_seed=seed).q).reshape(-1, 6)
+            if not len(answer):
+                failures.append(f"{pose}, seed {label}: nothing returned")
+                continue
+            position, rotation = oracle_errors(robot, answer, np.repeat(T[None], len(answer), 0))
+            if max(position.max(), rotation.max()) > TOLERANCE:
+                failures.append(f"{pose}, seed {label}: a solution is not exact on the table")
+            nearest = np.abs(wrapped(answer - seed)).max(axis=1).min()
+            if nearest > CONTINUITY:
+                failures.append(f"{pose}, seed {label}: nearest solution {nearest:.3f} rad away")
+    assert not failures, "\n".join(failures)

@@ -124,15 +124,21 @@ inline void seed_members(const Chain& chain, const Frame& target, const Joints& 
 }
 
 // A row whose values were set onto limits (`held` marks them): the other joints refined with
-// those held (monotone Newton: a root on the limit up to rounding is exact again), the values
-// clipped to the limits, verified again; false where it no longer verifies (`row` then holds the
-// clipped values as they were where that verifies).
+// those held (monotone Newton: a root on the limit up to rounding is exact again; a member of a
+// curve of solutions, sigma_min within the tolerance, only across the curve, settle_across, so
+// that it stays where the seed put it), the values clipped to the limits, verified again; false
+// where it no longer verifies (`row` then holds the clipped values as they were where that
+// verifies).
 inline bool settle_on_limits(const Chain& chain, const Frame& target, const Limits& limits,
                              const JointMask& held, double tolerance, double lever,
                              Solution& row, bool restore) {
   const Joints clipped = row.q;
-  refine(chain, target, row.q, held, refine_tolerance(tolerance, lever),
-         {kBudget, newton::kMonotone, 0.0});
+  if (row.singular && smallest_singular(chain, row.q, lever, tolerance) <= tolerance) {
+    settle_across(chain, target, row.q, lever, tolerance, held);
+  } else {
+    refine(chain, target, row.q, held, refine_tolerance(tolerance, lever),
+           {kBudget, newton::kMonotone, 0.0});
+  }
   for (int j = 0; j < kDof; ++j) {
     row.q[j] = std::min(std::max(row.q[j], limits[j].lower), limits[j].upper);
   }

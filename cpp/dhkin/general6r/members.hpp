@@ -46,6 +46,61 @@ inline double squared_distance(const Joints& a, const Joints& b) {
   return total;
 }
 
+// Gauss-Newton across a curve of solutions, in place: each step solves J dq = e on the scaled
+// Jacobian's directions whose singular values exceed `flat` (the tolerance: a step of a radian
+// along a direction at or below it moves the pose less than the tolerance, as along a curve of
+// solutions, sigma ~ 1e-15 on a true one), so that a point near the curve moves onto the
+// solutions across it, not along it. Where the target lies a hair off a
+// singular set (a description rounded to 11 significant digits puts an HC10 target 3e-11 off its
+// table's curve) the curve becomes a valley whose floor misses the target by far less than the
+// tolerance, and Newton's full steps (residual / sigma along the weak direction, sigma ~ 1e-12)
+// slide a point along the floor towards one of its isolated roots, carrying a member far from
+// the seed. Joints marked `held` keep their values (a member set onto a limit). Steps go on
+// while each shrinks the squared error kPolishGain-fold (Newton's rate; less is the rounding of
+// the arithmetic), at most kMemberBudget. Returns the errors at q.
+inline PoseError settle_across(const Chain& chain, const Frame& target, Joints& q, double lever,
+                               double flat, const JointMask& held = {}) {
+  std::array<Frame, kDof + 1> frames;
+  double e[6], trial_e[6];
+  fk_frames(chain, q.data(), frames.data());
+  PoseError error = error_twist(frames[kDof], target, e);
+  const auto scaled_size = [lever](const double* twist) {  // |e|^2, metres divided by lever
+    double size = 0.0;
+    for (int r = 0; r < 6; ++r) {
+      const double component = r < 3 ? twist[r] / lever : twist[r];
+      size += component * component;
+    }
+    return size;
+  };
+  double size = scaled_size(e);
+  for (int step = 0; step < kMemberBudget && size > 0.0; ++step) {
+    Jacobian J;
+    jacobian(chain, frames.data(), J.data());
+    J.topRows<3>() /= lever;
+    for (int j = 0; j < kDof; ++j) {
+      if (held[j]) J.col(j).setZero();  // the least-norm step leaves a zero column's joint alone
+    }
+    Eigen::Matrix<double, 6, 1> residual;
+    for (int r = 0; r < 6; ++r) residual(r) = r < 3 ? e[r] / lever : e[r];
+    const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix<double, kDof, 1> dq = Eigen::Matrix<double, kDof, 1>::Zero();
+    for (int w = 0; w < kDof; ++w) {
+      const double sigma = svd.singularValues()(w);
+      if (sigma > flat) dq += (svd.matrixU().col(w).dot(residual) / sigma) * svd.matrixV().col(w);
+    }
+    Joints trial;
+    for (int j = 0; j < kDof; ++j) trial[j] = q[j] + dq(j);
+    std::array<Frame, kDof + 1> trial_frames;
+    fk_frames(chain, trial.data(), trial_frames.data());
+    const PoseError trial_error = error_twist(trial_frames[kDof], target, trial_e);
+    const double trial_size = scaled_size(trial_e);
+    if (!(trial_size * newton::kPolishGain <= size)) break;
+    q = trial, frames = trial_frames, error = trial_error, size = trial_size;
+    for (int r = 0; r < 6; ++r) e[r] = trial_e[r];
+  }
+  return error;
+}
+
 // A singular root q (in place) moved along the solutions towards `seed`: the member of a curve
 // of solutions nearest the seed where a joint is free. Each step goes along the Jacobian's weak
 // directions (singular values within `band`) by the seed's offset projected onto them, at most
@@ -60,9 +115,11 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
                  double tolerance, double lever, double band, PoseError& error) {
   double distance = squared_distance(q, seed);
   double length = newton::kMaxJointStep;
+  bool on_curve = false;  // q lies on a curve of solutions (sigma_min within the tolerance)
   for (int trial_step = 0; trial_step < kWalkSteps; ++trial_step) {
     const Jacobian J = scaled_jacobian(chain, q, lever);
     const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullV);
+    on_curve = svd.singularValues()(kDof - 1) <= tolerance;
     Eigen::Matrix<double, kDof, 1> offset, step = Eigen::Matrix<double, kDof, 1>::Zero();
     for (int j = 0; j < kDof; ++j) offset(j) = wrap(seed[j] - q[j]);
     for (int w = 0; w < kDof; ++w) {
@@ -75,7 +132,11 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     const double scale = longest > length ? length / longest : 1.0;
     Joints trial, middle;
     for (int j = 0; j < kDof; ++j) trial[j] = q[j] + scale * step(j);
-    refine(chain, target, trial, JointMask{}, tolerance, {kMemberBudget, newton::kGrowth, 0.0});
+    if (on_curve) {
+      settle_across(chain, target, trial, lever, tolerance);
+    } else {
+      refine(chain, target, trial, JointMask{}, tolerance, {kMemberBudget, newton::kGrowth, 0.0});
+    }
     const PoseError trial_error = check(chain, trial.data(), target);
     const double trial_distance = squared_distance(trial, seed);
     double chord = 0.0;
@@ -84,14 +145,13 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
       chord = std::max(chord, std::abs(wrap(trial[j] - q[j])));
     }
     bool kept = trial_error.within(tolerance) && trial_distance < distance && chord > 0.0;
-    if (kept && svd.singularValues()(kDof - 1) > tolerance) {
+    if (kept && !on_curve) {
       // an isolated (near-)singular root's cloud: the midpoint itself verifies
       kept = check(chain, middle.data(), target).within(tolerance);
     } else if (kept) {
-      // on a curve of solutions: the refined midpoint stays near the chord
+      // on a curve of solutions: the midpoint, moved across the curve, verifies near the chord
       const Joints midpoint = middle;
-      refine(chain, target, middle, JointMask{}, tolerance,
-             {kMemberBudget, newton::kMonotone, 0.0});
+      settle_across(chain, target, middle, lever, tolerance);
       double moved = 0.0;
       for (int j = 0; j < kDof; ++j) {
         moved = std::max(moved, std::abs(wrap(middle[j] - midpoint[j])));
@@ -110,14 +170,20 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
   }
   // polish: monotone Newton steps from the member reached (Newton converges slowly at a singular
   // root; these bring its residual to kRefineFraction of the tolerance)
+  // (across the curve only, on a curve: along it Newton would slide the member off the seed)
   Joints trial = q;
-  refine(chain, target, trial, JointMask{}, refine_tolerance(tolerance, lever),
-         {kMemberBudget, newton::kMonotone, 0.0});
+  if (on_curve) {
+    settle_across(chain, target, trial, lever, tolerance);
+  } else {
+    refine(chain, target, trial, JointMask{}, refine_tolerance(tolerance, lever),
+           {kMemberBudget, newton::kMonotone, 0.0});
+  }
   const PoseError polished = check(chain, trial.data(), target);
   if (polished.within(tolerance) && polished.largest() < error.largest()) {
     q = wrapped(trial);
     error = polished;
   }
+
 }
 
 // Damped Newton from `seed` onto the solutions (the families' seeded refinement), into `out`;

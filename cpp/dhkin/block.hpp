@@ -66,6 +66,22 @@ struct FrameColumns {
 // Whether a and b hold the same bits in every lane.
 DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_of(a) != bits_of(b)); }
 
+// Bound on wrap's rounding (angles.hpp) of a difference of two values within [-pi, pi]: it
+// takes off one whole turn whose head is exact, so its result is within ~1e-15 rad of a - b -+ 2pi;
+// this bound is a thousand times that.
+constexpr double kWrapRounding = 1e-12;
+
+// Lanes where joint values a and b surely differ by more than `distance` (mod 2pi for a revolute
+// joint), by a test without wrap: |a - b| beyond distance + kWrapRounding and, for revolute values
+// within [-pi, pi], short of 2pi - distance - kWrapRounding. Plan::same finds these lanes apart
+// too; the others it decides.
+DHKIN_INLINE Mask surely_apart(const Lanes& a, const Lanes& b, bool revolute, double distance) {
+  const Lanes d = abs(a - b);
+  const Mask beyond = d > distance + kWrapRounding;
+  if (!revolute) return beyond;
+  return beyond && d < kTwoPi - distance - kWrapRounding && abs(a) <= kPi && abs(b) <= kPi;
+}
+
 }  // namespace block
 
 // check() of each branch's candidate q[b] (lanes: poses) against `target`, for the branches
@@ -182,11 +198,18 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   for (int b = 0; b < kBranches; ++b) {
     declined = declined || (out.ok[b] && !out.errors[b].within(tolerance));
   }
+  // one solution from two branches: the pipeline merges them (plan.same, for the lanes a cheaper
+  // test does not find apart)
+  const double merge_distance = 2.0 * kMergeAngle;
   for (int a = 0; a < kBranches; ++a) {
     for (int b = a + 1; b < kBranches; ++b) {
-      const Mask both = out.ok[a] && out.ok[b] && !declined;
-      if (any(both)) {  // one solution from two branches: the pipeline merges them
-        declined = declined || (both && plan.same(out.q[a], out.q[b], 2.0 * kMergeAngle));
+      Mask maybe = out.ok[a] && out.ok[b] && !declined;
+      for (int j = 0; j < kDof && any(maybe); ++j) {
+        maybe = maybe && !block::surely_apart(out.q[a][j], out.q[b][j], plan.revolute(j),
+                                              merge_distance);
+      }
+      if (any(maybe)) {
+        declined = declined || (maybe && plan.same(out.q[a], out.q[b], merge_distance));
       }
     }
   }

@@ -162,32 +162,56 @@ struct ElbowSetup {
   V total{};  // angle about n of G plane_x from plane_x
 };
 
-// `reach_side`: a double, or per lane (the branches of one pose in lanes, branch_lanes.hpp).
+// The elbow setups of N motions G (turns[a], span[a] = |arm|), step by step, each step for every
+// motion before the next (independent work the processor overlaps); each one's values are
+// computed as they would be for it alone. `reach_side`: doubles, or per lane (the branches of one
+// pose in lanes, branch_lanes.hpp).
+template <int N, class V, class R>
+DHKIN_INLINE void elbow_setups(const OffsetGeometry& g, const FrameT<V>& T_home,
+                               const TurnsT<V>* turns, const V* span, const R* reach_side,
+                               double clamp, ElbowSetup<V>* out) {
+  const double L2 = g.upper_length, L3 = g.forearm_length;
+  const double low = std::abs(L2 - L3), high = L2 + L3;
+  V root[N], kappa[N], first[N], second[N];
+  SinCosT<V> f[N];
+  for (int a = 0; a < N; ++a) {
+    out[a].total = plane_angle(g, motion_apply(g, T_home, turns[a], g.plane_x, false));
+  }
+  for (int a = 0; a < N; ++a) {
+    const V outer = high - span[a], inner = span[a] - low;
+    out[a].reach_ok = outer >= -clamp && inner >= -clamp;
+    out[a].clamped = outer < 0.0 || inner < 0.0;
+    // (L2 L3)^2 - kappa^2 in factored form: accurate near both boundaries
+    root[a] = sqrt(max(outer, V(g.spread)) * (high + span[a]) * max(inner, V(g.spread)) *
+                   (span[a] + low)) / 2.0;
+    kappa[a] = (span[a] * span[a] - L2 * L2 - L3 * L3) / 2.0;
+  }
+  for (int a = 0; a < N; ++a) {
+    out[a].merged = small_angle(root[a], abs(kappa[a]), kMergeAngle);
+    root[a] = select(out[a].merged, V(0.0), root[a]);
+    out[a].flag = bits_if(out[a].merged || root[a] <= kFlagBand * L2 * L3, kElbow);
+  }
+  for (int a = 0; a < N; ++a) {
+    const V half = atan2(root[a], kappa[a]);
+    first[a] = g.elbow_base + half, second[a] = g.elbow_base - half;
+  }
+  for (int a = 0; a < N; ++a) f[a] = sincos(first[a]);
+  for (int a = 0; a < N; ++a) {
+    const V turn = f[a].c * g.elbow_turn + g.sign3 * f[a].s * g.elbow_alpha;
+    const auto swap = select(turn >= 0.0, V(1.0), V(-1.0)) != V(reach_side[a]);
+    out[a].q3[0] = select(swap, second[a], first[a]);
+    out[a].q3[1] = select(swap, first[a], second[a]);
+  }
+}
+
+// What both elbow branches of one motion G share (elbow_setups above).
 template <class V, class R>
 DHKIN_INLINE ElbowSetup<V> elbow_setup(const OffsetGeometry& g, const FrameT<V>& T_home,
                                        const TurnsT<V>& turns, V span, R reach_side,
                                        double clamp) {
-  const double L2 = g.upper_length, L3 = g.forearm_length;
-  const double low = std::abs(L2 - L3), high = L2 + L3;
-  const V outer = high - span, inner = span - low;
-  ElbowSetup<V> out;
-  out.reach_ok = outer >= -clamp && inner >= -clamp;
-  out.clamped = outer < 0.0 || inner < 0.0;
-  // (L2 L3)^2 - kappa^2 in factored form: accurate near both boundaries
-  V root = sqrt(max(outer, V(g.spread)) * (high + span) * max(inner, V(g.spread)) *
-                (span + low)) / 2.0;
-  const V kappa = (span * span - L2 * L2 - L3 * L3) / 2.0;
-  out.merged = small_angle(root, abs(kappa), kMergeAngle);
-  root = select(out.merged, V(0.0), root);
-  out.flag = bits_if(out.merged || root <= kFlagBand * L2 * L3, kElbow);
-  const V half = atan2(root, kappa);
-  const V first = g.elbow_base + half, second = g.elbow_base - half;
-  const SinCosT<V> f = sincos(first);
-  const V turn = f.c * g.elbow_turn + g.sign3 * f.s * g.elbow_alpha;
-  const auto swap = select(turn >= 0.0, V(1.0), V(-1.0)) != V(reach_side);
-  out.q3[0] = select(swap, second, first), out.q3[1] = select(swap, first, second);
-  out.total = plane_angle(g, motion_apply(g, T_home, turns, g.plane_x, false));
-  return out;
+  ElbowSetup<V> out[1];
+  elbow_setups<1>(g, T_home, &turns, &span, &reach_side, clamp, out);
+  return out[0];
 }
 
 // The same, for the arm's target point (span = |arm|).
@@ -328,88 +352,123 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
   const V phase = atan2(along_side, along_n);
   const V half = atan2(root, V(c));
   const Vec3& w6 = g.directions[5];
+  // The branches go step by step, each step for every branch before the next (independent work
+  // the processor overlaps; a branch's steps form one long chain of dependent operations): the
+  // two shoulder branches s, the four shoulder-wrist branches k = 2 s + w, the eight branches
+  // b = 4 s + 2 e + w. Each branch's values are computed as they would be one branch at a time.
+  V q1[2], cosine[2], sine[2], q5_half[2];
+  MaskOf<V> q1_valid[2], wrist_close[2], wrist_seeded[2];
+  BitsOf<V> wrist_flag[2], wrist_near[2];
+  SinCosT<V> t1[2];
+  Vec3T<V> u[2];
   for (int s = 0; s < 2; ++s) {
-    const V q1 = select(shoulder_seeded, seed[0] + (s == 0 ? 0.0 : kPi),
-                        s == 0 ? phase + g.left_sign * half : phase - g.left_sign * half);
-    const double reach_side = s == 0 ? g.lateral_sign : -g.lateral_sign;
-    const auto q1_valid = shoulder_ok && (s == 0 || !shoulder_merged);
-    // q5 from n(q1) . z6 = cos(q5 - psi), q6 from the rest
-    const SinCosT<V> t1 = sincos(q1);
-    const Vec3T<V> m = rotate_about(g.directions[0], t1.c, t1.s, g.n);
+    q1[s] = select(shoulder_seeded, seed[0] + (s == 0 ? 0.0 : kPi),
+                   s == 0 ? phase + g.left_sign * half : phase - g.left_sign * half);
+    q1_valid[s] = shoulder_ok && (s == 0 || !shoulder_merged);
+  }
+  // q5 from n(q1) . z6 = cos(q5 - psi), q6 from the rest
+  for (int s = 0; s < 2; ++s) t1[s] = sincos(q1[s]);
+  for (int s = 0; s < 2; ++s) {
+    const Vec3T<V> m = rotate_about(g.directions[0], t1[s].c, t1[s].s, g.n);
     const Vec3T<V> f{T.R[0][0] * m.x + T.R[1][0] * m.y + T.R[2][0] * m.z,  // R_T^T n(q1)
                      T.R[0][1] * m.x + T.R[1][1] * m.y + T.R[2][1] * m.z,
                      T.R[0][2] * m.x + T.R[1][2] * m.y + T.R[2][2] * m.z};
-    const Vec3T<V> u = g.home_rotation * f;  // u = M_R R_T^T n(q1)
-    const V cosine = dot(u, w6);
-    const V sine = norm(cross(w6, u));  // exact for tiny angles (no arccos)
-    const BitsOf<V> wrist_flag = bits_if(sine <= kFlagBand, kWrist);
-    const auto wrist_close = sine <= request.seed_angle + q1_uncertainty;
-    const BitsOf<V> wrist_near = bits_if(wrist_close, kWrist);
-    const auto wrist_seeded = wrist_close && (request.use_seed & kWrist) != 0;
-    const V q5_half = atan2(sine, cosine);
-    const Vec3T<V> a = u - cosine * w6;
-    const SinCosT<V> minus_q1 = negated(t1);  // sincos(-q1)
-    for (int w = 0; w < 2; ++w) {
-      const V q5 = g.psi + (w == 0 ? g.up_sign * q5_half : -g.up_sign * q5_half);
-      const SinCosT<V> minus_q5 = sincos(-q5);
-      const Vec3T<V> t = rotate_about(g.directions[4], minus_q5.c, minus_q5.s, g.n);  // R5^T n
-      const Vec3T<V> b = t - dot(t, w6) * w6;
-      V q6 = select(wrist_seeded, seed[5], atan2(dot(w6, cross(a, b)), dot(a, b)));
-      TurnsT<V> turns{minus_q5, sincos(-q6), minus_q1};
-      Vec3T<V> arm = arm_point(g, T_home, turns);
-      for_each_lane(wrist_close, [&](int l) {  // near the wrist singularity: q6 kept in reach
-        Turns turns_l = lane(turns, l);
-        const double q6_l = lane(q6, l);
-        const double kept = kept_in_reach(g, lane(T_home, l), turns_l, lane(arm, l), lane(q5, l),
-                                          q6_l, request.clamp);
-        if (kept != q6_l) {
-          turns_l.q6 = sincos(-kept);
-          set_lane(q6, l, kept);
-          set_lane(turns, l, turns_l);
-          set_lane(arm, l, arm_point(g, lane(T_home, l), turns_l));
-        }
-      });
-      const V span = norm(arm);
-      out.why[2 + 2 * s + w] = span;
-      // the two wrist roots coincide exactly: one solution
-      const auto wrist_valid = w == 0 || wrist_seeded || sine != 0.0;
-      const ElbowSetup<V> setup = elbow_setup(g, T_home, turns, span, reach_side, request.clamp);
-      for (int e = 0; e < 2; ++e) {
-        const ElbowRoot<V> r = elbow(g, setup, arm, seed[1], request, e);
-        const int b = 4 * s + 2 * e + w;
-        out.q[b] = {q1, r.q2, r.q3, r.q4, q5, q6};
-        out.valid[b] = q1_valid && wrist_valid && r.valid;
-        out.flags[b] = shoulder_flag | wrist_flag | r.flag;
-        out.near[b] = shoulder_near | wrist_near | r.near;
+    u[s] = g.home_rotation * f;  // u = M_R R_T^T n(q1)
+    cosine[s] = dot(u[s], w6);
+    sine[s] = norm(cross(w6, u[s]));  // exact for tiny angles (no arccos)
+    wrist_flag[s] = bits_if(sine[s] <= kFlagBand, kWrist);
+    wrist_close[s] = sine[s] <= request.seed_angle + q1_uncertainty;
+    wrist_near[s] = bits_if(wrist_close[s], kWrist);
+    wrist_seeded[s] = wrist_close[s] && (request.use_seed & kWrist) != 0;
+  }
+  for (int s = 0; s < 2; ++s) q5_half[s] = atan2(sine[s], cosine[s]);
+  V q5[4], q6[4], span[4];
+  SinCosT<V> minus_q5[4];
+  TurnsT<V> turns[4];
+  Vec3T<V> arm[4];
+  for (int k = 0; k < 4; ++k) {
+    const int s = k / 2, w = k % 2;
+    q5[k] = g.psi + (w == 0 ? g.up_sign * q5_half[s] : -g.up_sign * q5_half[s]);
+  }
+  for (int k = 0; k < 4; ++k) minus_q5[k] = sincos(-q5[k]);
+  for (int k = 0; k < 4; ++k) {
+    const int s = k / 2;
+    const Vec3T<V> a = u[s] - cosine[s] * w6;
+    const Vec3T<V> t = rotate_about(g.directions[4], minus_q5[k].c, minus_q5[k].s, g.n);  // R5^T n
+    const Vec3T<V> b = t - dot(t, w6) * w6;
+    q6[k] = select(wrist_seeded[s], seed[5], atan2(dot(w6, cross(a, b)), dot(a, b)));
+  }
+  for (int k = 0; k < 4; ++k) {
+    turns[k] = {minus_q5[k], sincos(-q6[k]), negated(t1[k / 2])};  // negated: sincos(-q1)
+  }
+  for (int k = 0; k < 4; ++k) arm[k] = arm_point(g, T_home, turns[k]);
+  for (int k = 0; k < 4; ++k) {
+    for_each_lane(wrist_close[k / 2], [&](int l) {  // near the wrist singularity: q6 kept in reach
+      Turns turns_l = lane(turns[k], l);
+      const double q6_l = lane(q6[k], l);
+      const double kept = kept_in_reach(g, lane(T_home, l), turns_l, lane(arm[k], l),
+                                        lane(q5[k], l), q6_l, request.clamp);
+      if (kept != q6_l) {
+        turns_l.q6 = sincos(-kept);
+        set_lane(q6[k], l, kept);
+        set_lane(turns[k], l, turns_l);
+        set_lane(arm[k], l, arm_point(g, lane(T_home, l), turns_l));
       }
-      for_each_lane(wrist_seeded && q1_valid, [&](int l) {  // the member nearest the seed
-        Joints seed_l;
-        const FamilyRequest request_l = lane(request, l, seed_l);
-        for (int e = 0; e < 2; ++e) {
-          const int b = 4 * s + 2 * e + w;
-          if (request.only_branch >= 0 && b != request.only_branch) {
-            set_lane(out.valid[b], l, false);
-            continue;
-          }
-          Member found;
-          const bool located =
-              request.at_seed
-                  ? (found = member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), seed_l[5],
-                                    reach_side, seed_l, request_l, e))
-                        .valid
-                  : nearest_member(g, lane(T_home, l), lane(minus_q1, l), lane(q5, l), reach_side,
-                                   seed_l, request_l, e, found);
-          if (located) {
-            set_lane(out.q[b][1], l, found.q2);
-            set_lane(out.q[b][2], l, found.q3);
-            set_lane(out.q[b][3], l, found.q4);
-            set_lane(out.q[b][5], l, found.q6);
-            set_lane(out.valid[b], l, true);
-            set_lane(out.flags[b], l, (lane(out.flags[b], l) & ~kElbow) | found.flag);
-          }
+    });
+  }
+  for (int k = 0; k < 4; ++k) {
+    span[k] = norm(arm[k]);
+    out.why[2 + k] = span[k];
+  }
+  ElbowSetup<V> setup[4];
+  const double reach_side[4] = {g.lateral_sign, g.lateral_sign, -g.lateral_sign, -g.lateral_sign};
+  elbow_setups<4>(g, T_home, turns, span, reach_side, request.clamp, setup);
+  ElbowRoot<V> roots[kBranches];
+  for (int b = 0; b < kBranches; ++b) {
+    const int k = 2 * (b / 4) + b % 2, e = (b / 2) % 2;
+    roots[b] = elbow(g, setup[k], arm[k], seed[1], request, e);
+  }
+  for (int b = 0; b < kBranches; ++b) {
+    const int s = b / 4, w = b % 2, k = 2 * s + w;
+    const ElbowRoot<V>& r = roots[b];
+    // the two wrist roots coincide exactly: one solution
+    const auto wrist_valid = w == 0 || wrist_seeded[s] || sine[s] != 0.0;
+    out.q[b] = {q1[s], r.q2, r.q3, r.q4, q5[k], q6[k]};
+    out.valid[b] = q1_valid[s] && wrist_valid && r.valid;
+    out.flags[b] = shoulder_flag | wrist_flag[s] | r.flag;
+    out.near[b] = shoulder_near | wrist_near[s] | r.near;
+  }
+  for (int k = 0; k < 4; ++k) {
+    const int s = k / 2, w = k % 2;
+    const double reach_side = s == 0 ? g.lateral_sign : -g.lateral_sign;
+    const SinCosT<V> minus_q1 = turns[k].q1;
+    for_each_lane(wrist_seeded[s] && q1_valid[s], [&](int l) {  // the member nearest the seed
+      Joints seed_l;
+      const FamilyRequest request_l = lane(request, l, seed_l);
+      for (int e = 0; e < 2; ++e) {
+        const int b = 4 * s + 2 * e + w;
+        if (request.only_branch >= 0 && b != request.only_branch) {
+          set_lane(out.valid[b], l, false);
+          continue;
         }
-      });
-    }
+        Member found;
+        const bool located =
+            request.at_seed
+                ? (found = member(g, lane(T_home, l), lane(minus_q1, l), lane(q5[k], l),
+                                  seed_l[5], reach_side, seed_l, request_l, e))
+                      .valid
+                : nearest_member(g, lane(T_home, l), lane(minus_q1, l), lane(q5[k], l),
+                                 reach_side, seed_l, request_l, e, found);
+        if (located) {
+          set_lane(out.q[b][1], l, found.q2);
+          set_lane(out.q[b][2], l, found.q3);
+          set_lane(out.q[b][3], l, found.q4);
+          set_lane(out.q[b][5], l, found.q6);
+          set_lane(out.valid[b], l, true);
+          set_lane(out.flags[b], l, (lane(out.flags[b], l) & ~kElbow) | found.flag);
+        }
+      }
+    });
   }
   out.drop_non_finite();
 }

@@ -132,8 +132,10 @@ struct WristRoots {
   BitsOf<V> flag{}, near{};
 };
 
-// Both wrist branches for an arm turned by turn23 about `lateral`: H = F^T R23^T K1 =
-// Rz(t4) Ry(t5 + tilt) Rz(t6).
+// Both wrist branches for each of N arms, arm a turned by turn23[a] about `lateral`:
+// H = F^T R23^T K1 = Rz(t4) Ry(t5 + tilt) Rz(t6). The arms go step by step, each step for every
+// arm before the next (independent work the processor overlaps); each arm's values are computed
+// as they would be for it alone.
 //
 // Regular: t4 = atan2(h12, h02), then the flip (t4 + pi, -theta, t6 + pi). Seeded (near the
 // singularity, `use_seed` has kWrist): the pose fixes only c = t4 + t6 (t4 - t6 where theta is
@@ -141,41 +143,74 @@ struct WristRoots {
 // r = c - (c of the seed), wrapped, evenly between the two joints: t4 = seed's t4 + r / 2 (in both
 // branches), theta = +- the computed angle, and t6 from the remainder Ry(-theta) Rz(-t4) H, so
 // that the pose error is what the choice costs.
-template <class V>
-DHKIN_INLINE WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns<V>& columns, V turn23,
-                           const JointsT<V>& seed, const FamilyRequestT<V>& request) {
-  const WristColumns<V> h = wrist_columns(g, columns, sincos(turn23));
-  const Vec3T<V> h0 = h.h0, h2 = h.h2;  // columns 0 and 2 of H
-  const V h00 = h0.x, h10 = h0.y, h20 = h0.z, h02 = h2.x, h12 = h2.y, h22 = h2.z;
+template <int N, class V>
+DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* const* columns,
+                         const V* turn23, const JointsT<V>& seed,
+                         const FamilyRequestT<V>& request, WristRoots<V>* roots) {
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
-  const V sine = sqrt(h02 * h02 + h12 * h12);
-  WristRoots<V> roots;
-  roots.flag = bits_if(sine <= kFlagBand, kWrist);
-  roots.near = bits_if(sine <= request.seed_angle, kWrist);
-  const V theta = atan2(sine, h22);
-  const auto seeded = roots.near != 0 && (request.use_seed & kWrist) != 0;
-  V alpha = atan2(h12, h02);
-  if (any(seeded)) {  // theta near 0 fixes t4 + t6; near pi, t4 - t6 (Ry(pi) Rz(t6) = Rz(-t6) Ry(pi))
-    const SinCosT<V> ta = sincos(alpha), tt = sincos(theta);
+  SinCosT<V> t23[N], s_theta[N], s4[N][2];
+  V t4[N][2], t5[N][2];  // of each wrist branch
+  WristColumns<V> h[N];  // columns 0 and 2 of H
+  V sine[N], theta[N], alpha[N];
+  MaskOf<V> seeded[N];
+  for (int a = 0; a < N; ++a) t23[a] = sincos(turn23[a]);
+  for (int a = 0; a < N; ++a) {
+    h[a] = wrist_columns(g, *columns[a], t23[a]);
+    const V h02 = h[a].h2.x, h12 = h[a].h2.y;
+    sine[a] = sqrt(h02 * h02 + h12 * h12);
+    roots[a].flag = bits_if(sine[a] <= kFlagBand, kWrist);
+    roots[a].near = bits_if(sine[a] <= request.seed_angle, kWrist);
+    seeded[a] = roots[a].near != 0 && (request.use_seed & kWrist) != 0;
+  }
+  for (int a = 0; a < N; ++a) {
+    theta[a] = atan2(sine[a], h[a].h2.z);
+    alpha[a] = atan2(h[a].h2.y, h[a].h2.x);
+  }
+  for (int a = 0; a < N; ++a) {
+    if (!any(seeded[a])) continue;
+    // theta near 0 fixes t4 + t6; near pi, t4 - t6 (Ry(pi) Rz(t6) = Rz(-t6) Ry(pi))
+    const V h00 = h[a].h0.x, h10 = h[a].h0.y, h20 = h[a].h0.z, h22 = h[a].h2.z;
+    const SinCosT<V> ta = sincos(alpha[a]), tt = sincos(theta[a]);
     const V gamma = atan2(-ta.s * h00 + ta.c * h10,
                           tt.c * (ta.c * h00 + ta.s * h10) - tt.s * h20);
     const V turn = select(h22 >= 0.0, V(1.0), V(-1.0));
-    alpha = select(seeded,
-                   d4 * seed[3] + 0.5 * wrap(alpha + turn * gamma - d4 * seed[3] - turn * d6 * seed[5]),
-                   alpha);
+    alpha[a] = select(seeded[a],
+                      d4 * seed[3] + 0.5 * wrap(alpha[a] + turn * gamma - d4 * seed[3] -
+                                                turn * d6 * seed[5]),
+                      alpha[a]);
   }
-  const SinCosT<V> s_theta = sincos(theta);
-  for (int w = 0; w < 2; ++w) {
-    const V t4 = alpha + (w == 1 ? select(seeded, V(0.0), V(kPi)) : V(0.0));
-    const V t5 = w == 0 ? theta : -theta;
-    const SinCosT<V> s4 = sincos(t4), s5 = w == 0 ? s_theta : negated(s_theta);
-    // Ry(-t5) Rz(-t4) H = Rz(t6): t6 from its first column
-    const V t6 = atan2(-s4.s * h00 + s4.c * h10, s5.c * (s4.c * h00 + s4.s * h10) - s5.s * h20);
-    roots.q[w][0] = d4 * t4;
-    roots.q[w][1] = d5 * (t5 - g.tilt);
-    roots.q[w][2] = d6 * t6;
+  for (int a = 0; a < N; ++a) s_theta[a] = sincos(theta[a]);
+  for (int a = 0; a < N; ++a) {
+    for (int w = 0; w < 2; ++w) {
+      t4[a][w] = alpha[a] + (w == 1 ? select(seeded[a], V(0.0), V(kPi)) : V(0.0));
+      t5[a][w] = w == 0 ? theta[a] : -theta[a];
+      s4[a][w] = sincos(t4[a][w]);
+    }
   }
-  return roots;
+  for (int a = 0; a < N; ++a) {
+    const V h00 = h[a].h0.x, h10 = h[a].h0.y, h20 = h[a].h0.z;
+    for (int w = 0; w < 2; ++w) {
+      const SinCosT<V> s5 = w == 0 ? s_theta[a] : negated(s_theta[a]);
+      const SinCosT<V>& c4 = s4[a][w];
+      // Ry(-t5) Rz(-t4) H = Rz(t6): t6 from its first column
+      const V t6 =
+          atan2(-c4.s * h00 + c4.c * h10, s5.c * (c4.c * h00 + c4.s * h10) - s5.s * h20);
+      roots[a].q[w][0] = d4 * t4[a][w];
+      roots[a].q[w][1] = d5 * (t5[a][w] - g.tilt);
+      roots[a].q[w][2] = d6 * t6;
+    }
+  }
+}
+
+// Both wrist branches for one arm turned by turn23 about `lateral` (wrists above).
+template <class V>
+DHKIN_INLINE WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns<V>& columns,
+                                 V turn23, const JointsT<V>& seed,
+                                 const FamilyRequestT<V>& request) {
+  const TargetColumns<V>* arm[1] = {&columns};
+  WristRoots<V> roots[1];
+  wrists<1>(g, arm, &turn23, seed, request, roots);
+  return roots[0];
 }
 
 template <class V>
@@ -206,43 +241,61 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
   const JointsT<V>& seed = *request.seed;
   const ShoulderRoots<V> arm = shoulder(g, T, seed[0], request, out);
   const double upper = g.upper_length, fore = g.forearm_length;
+  // The branches go step by step, each step for every branch before the next (independent work
+  // the processor overlaps): the two shoulder branches s, the four arms k = 2 s + e, their two
+  // wrist branches each. Each branch's values are computed as they would be one at a time.
+  V turn1[2], cosine_scaled[2], sine_scaled[2];
+  PlanarT<V> target[2];
+  TargetColumns<V> columns[2];
+  MaskOf<V> reachable[2], merged[2], elbow_seeded[2];
+  BitsOf<V> clamped[2], elbow_flag[2], elbow_near[2];
   for (int s = 0; s < 2; ++s) {
-    const V turn1 = s == 0 ? arm.front_turn : arm.back_turn;
-    const PlanarT<V> target{arm.height, s == 0 ? arm.front_reach : arm.back_reach};
-    const TargetColumns<V> columns = target_columns(g, T, turn1);
-    const V distance = sqrt(target.height * target.height + target.reach * target.reach);
+    turn1[s] = s == 0 ? arm.front_turn : arm.back_turn;
+    target[s] = {arm.height, s == 0 ? arm.front_reach : arm.back_reach};
+    columns[s] = target_columns(g, T, turn1[s]);
+    const V distance =
+        sqrt(target[s].height * target[s].height + target[s].reach * target[s].reach);
     out.why[2 + s] = distance;
     const V outer = (upper + fore) - distance;
     const V inner = distance - std::abs(upper - fore);
-    const auto reachable = outer >= -request.clamp && inner >= -request.clamp;
-    const BitsOf<V> clamped = bits_if(outer < 0.0 || inner < 0.0, kClamped);
+    reachable[s] = outer >= -request.clamp && inner >= -request.clamp;
+    clamped[s] = bits_if(outer < 0.0 || inner < 0.0, kClamped);
     // (2 L2 L3 sin psi)^2 as a product of factors: accurate near both boundaries
-    V sine_scaled = sqrt(max(outer, V(g.spread)) * (upper + fore + distance) *
-                         max(inner, V(g.spread)) * (distance + std::abs(upper - fore)));
-    const V cosine_scaled = distance * distance - upper * upper - fore * fore;
-    const auto merged = small_angle(sine_scaled, abs(cosine_scaled), kMergeAngle);
-    sine_scaled = select(merged, V(0.0), sine_scaled);
-    const BitsOf<V> elbow_flag =
-        bits_if(merged || sine_scaled <= kFlagBand * 2 * upper * fore, kElbow);
-    const BitsOf<V> elbow_near = bits_if(distance <= request.seed_length, kElbow);
-    const auto elbow_seeded = elbow_near != 0 && (request.use_seed & kElbow) != 0;
-    for (int e = 0; e < 2; ++e) {
-      const V psi = atan2(e == 0 ? sine_scaled : -sine_scaled, cosine_scaled);
-      const V turn3 = psi - g.bend_at_zero;
-      const SinCosT<V> t3 = sincos(turn3);
-      const PlanarT<V> bent{
-          g.upper_arm.height + (t3.c * g.forearm.height - t3.s * g.forearm.reach),
-          g.upper_arm.reach + (t3.c * g.forearm.reach + t3.s * g.forearm.height)};
-      const V turn2 = select(elbow_seeded, g.signs[1] * seed[1], turn_to(target, bent));
-      const auto arm_valid =
-          (s == 0 ? arm.front_valid : arm.back_valid) && reachable && (e == 0 || !merged);
-      const WristRoots<V> w = wrist(g, columns, turn2 + turn3, seed, request);
-      for (int k = 0; k < 2; ++k) {
-        store(out, 4 * s + 2 * e + k, g.signs[0] * turn1, g.signs[1] * turn2,
-              g.signs[2] * turn3, w, k, arm_valid, arm.flag | elbow_flag | w.flag,
-              arm.near | elbow_near | w.near | clamped);
-      }
-    }
+    sine_scaled[s] = sqrt(max(outer, V(g.spread)) * (upper + fore + distance) *
+                          max(inner, V(g.spread)) * (distance + std::abs(upper - fore)));
+    cosine_scaled[s] = distance * distance - upper * upper - fore * fore;
+    merged[s] = small_angle(sine_scaled[s], abs(cosine_scaled[s]), kMergeAngle);
+    sine_scaled[s] = select(merged[s], V(0.0), sine_scaled[s]);
+    elbow_flag[s] = bits_if(merged[s] || sine_scaled[s] <= kFlagBand * 2 * upper * fore, kElbow);
+    elbow_near[s] = bits_if(distance <= request.seed_length, kElbow);
+    elbow_seeded[s] = elbow_near[s] != 0 && (request.use_seed & kElbow) != 0;
+  }
+  V turn2[4], turn3[4], turn23[4];
+  SinCosT<V> t3[4];
+  for (int k = 0; k < 4; ++k) {
+    const int s = k / 2, e = k % 2;
+    const V psi = atan2(e == 0 ? sine_scaled[s] : -sine_scaled[s], cosine_scaled[s]);
+    turn3[k] = psi - g.bend_at_zero;
+  }
+  for (int k = 0; k < 4; ++k) t3[k] = sincos(turn3[k]);
+  for (int k = 0; k < 4; ++k) {
+    const int s = k / 2;
+    const PlanarT<V> bent{
+        g.upper_arm.height + (t3[k].c * g.forearm.height - t3[k].s * g.forearm.reach),
+        g.upper_arm.reach + (t3[k].c * g.forearm.reach + t3[k].s * g.forearm.height)};
+    turn2[k] = select(elbow_seeded[s], g.signs[1] * seed[1], turn_to(target[s], bent));
+    turn23[k] = turn2[k] + turn3[k];
+  }
+  const TargetColumns<V>* arm_columns[4] = {&columns[0], &columns[0], &columns[1], &columns[1]};
+  WristRoots<V> w[4];
+  wrists<4>(g, arm_columns, turn23, seed, request, w);
+  for (int b = 0; b < kBranches; ++b) {
+    const int s = b / 4, e = (b / 2) % 2, k = 2 * s + e, wb = b % 2;
+    const auto arm_valid =
+        (s == 0 ? arm.front_valid : arm.back_valid) && reachable[s] && (e == 0 || !merged[s]);
+    store(out, b, g.signs[0] * turn1[s], g.signs[1] * turn2[k], g.signs[2] * turn3[k], w[k], wb,
+          arm_valid, arm.flag | elbow_flag[s] | w[k].flag,
+          arm.near | elbow_near[s] | w[k].near | clamped[s]);
   }
 }
 

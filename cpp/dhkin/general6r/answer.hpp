@@ -98,9 +98,9 @@ inline void walk_into_limits(const Chain& chain, const Frame& target, const Limi
 // The seed's choice where a joint is free, in place, as the families' seeded candidate (the
 // member of the solution family nearest the seed): each singular root (sigma within `band`)
 // becomes its member nearest the seed (nearest_member). The seed is never a root of its own. A
-// member with no 2pi copy
-// within the limits (widened to the band) is walked into them (walk_into_limits); one that
-// still has none, where the root itself has, stays where the root was. A root that moved onto
+// member with no 2pi copy within the limits (widened to the band) is walked into them
+// (walk_into_limits); one that still has none, where the root itself has, stays where the root
+// was. A root that moved onto
 // an earlier one (the merging rule) is dropped.
 inline void seed_members(const Chain& chain, const Frame& target, const Joints& seed,
                          const Limits& limits, double slack, double tolerance, double lever,
@@ -125,10 +125,10 @@ inline void seed_members(const Chain& chain, const Frame& target, const Joints& 
 
 // A row whose values were set onto limits (`held` marks them): the other joints refined with
 // those held (monotone Newton: a root on the limit up to rounding is exact again; a member of a
-// curve of solutions, sigma_min within the tolerance, only across the curve, settle_across, so
-// that it stays where the seed put it), the values clipped to the limits, verified again; false
-// where it no longer verifies (`row` then holds the clipped values as they were where that
-// verifies).
+// curve of solutions, sigma_min within the tolerance, only across the curve by settle_across,
+// so that it stays where the seed put it), the values clipped to the limits, verified again;
+// false where it no longer verifies (`row` then holds the clipped values as they were where
+// that verifies).
 inline bool settle_on_limits(const Chain& chain, const Frame& target, const Limits& limits,
                              const JointMask& held, double tolerance, double lever,
                              Solution& row, bool restore) {
@@ -151,14 +151,22 @@ inline bool settle_on_limits(const Chain& chain, const Frame& target, const Limi
   return row.error.within(tolerance);
 }
 
+// The 2pi copy of `value` nearest `reference`, moved by whole turns into [low, high] where it
+// lies outside (the caller checks that it lies within: an interval shorter than a turn may hold
+// no copy).
+inline double copy_into(double value, double reference, double low, double high) {
+  double copy = value + kTwoPi * std::nearbyint((reference - value) / kTwoPi);
+  if (copy < low) copy += kTwoPi * std::ceil((low - copy) / kTwoPi);
+  if (copy > high) copy -= kTwoPi * std::ceil((copy - high) / kTwoPi);
+  return copy;
+}
+
 // Per joint the 2pi copy of q nearest `reference` within the limits themselves, into `out`;
 // false where a joint has none.
 inline bool copy_within(const Limits& limits, const Joints& q, const Joints& reference,
                         Joints& out) {
   for (int j = 0; j < kDof; ++j) {
-    double value = q[j] + kTwoPi * std::nearbyint((reference[j] - q[j]) / kTwoPi);
-    if (value < limits[j].lower) value += kTwoPi * std::ceil((limits[j].lower - value) / kTwoPi);
-    if (value > limits[j].upper) value -= kTwoPi * std::ceil((value - limits[j].upper) / kTwoPi);
+    const double value = copy_into(q[j], reference[j], limits[j].lower, limits[j].upper);
     if (!(value >= limits[j].lower && value <= limits[j].upper)) return false;
     out[j] = value;
   }
@@ -181,9 +189,7 @@ inline void nearest_copies(const Chain& chain, const Frame& target, const std::v
     bool inside = true, moved = false;
     for (int j = 0; j < kDof && inside; ++j) {
       const double low = limits[j].lower - margin, high = limits[j].upper + margin;
-      double value = root.q[j] + kTwoPi * std::nearbyint((reference[j] - root.q[j]) / kTwoPi);
-      if (value < low) value += kTwoPi * std::ceil((low - value) / kTwoPi);
-      if (value > high) value -= kTwoPi * std::ceil((value - high) / kTwoPi);
+      double value = copy_into(root.q[j], reference[j], low, high);
       if (value < low || value > high) inside = false;
       if (value < limits[j].lower) value = limits[j].lower, moved = held[j] = true;
       if (value > limits[j].upper) value = limits[j].upper, moved = held[j] = true;

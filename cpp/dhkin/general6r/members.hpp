@@ -169,8 +169,8 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     length = std::min(2.0 * length, newton::kMaxJointStep);
   }
   // polish: monotone Newton steps from the member reached (Newton converges slowly at a singular
-  // root; these bring its residual to kRefineFraction of the tolerance)
-  // (across the curve only, on a curve: along it Newton would slide the member off the seed)
+  // root; these bring its residual to kRefineFraction of the tolerance); on a curve only across
+  // it (along it Newton would slide the member off the seed)
   Joints trial = q;
   if (on_curve) {
     settle_across(chain, target, trial, lever, tolerance);
@@ -183,7 +183,6 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     q = wrapped(trial);
     error = polished;
   }
-
 }
 
 // Damped Newton from `seed` onto the solutions (the families' seeded refinement), into `out`;

@@ -138,13 +138,21 @@ inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh
   int failed = settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever, band,
                       roots);
   if (!any_singular(roots, band)) return failed;
+  std::vector<Joints> start_values;  // the starts at the pose itself (not a moved pose's)
+  const auto keep_values = [&start_values](const std::vector<Start>& some) {
+    for (const Start& start : some) {
+      if (start.origin < kMoved) start_values.push_back(start.q);
+    }
+  };
+  keep_values(starts);
   for (const Elimination& other : solver.others) {
     starts.clear();
     all_candidates(other, solver.moves, T_dh, starts, false);
     failed += settle(tip.chain, tip_target, starts, solver.moves, verification, tip.lever, band,
                      roots);
+    keep_values(starts);
   }
-  valley_roots(tip.chain, tip_target, verification, tip.lever, band, roots);
+  valley_roots(tip.chain, tip_target, verification, tip.lever, band, start_values, roots);
   return failed;
 }
 

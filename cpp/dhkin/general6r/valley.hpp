@@ -16,9 +16,11 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
+#include "dhkin/general6r/members.hpp"
 #include "dhkin/general6r/roots.hpp"
 
 namespace dhkin::general6r {
@@ -120,11 +122,12 @@ inline void add_crossing(const Chain& chain, const Frame& target, const Joints& 
   met.push_back(true);
 }
 
-// The valley through `root` traced both ways (one way where it closes on itself), each sign
-// change of its weak combination a root added to `roots` (add_crossing).
+// The valley through `root` (a root, or a point on the valley's floor) traced both ways (one way
+// where it closes on itself), each sign change of its weak combination a root added to `roots`
+// (add_crossing); the points it passes appended to `visited`.
 inline void trace_valley(const Chain& chain, const Frame& target, const Joints& root,
                          double tolerance, double lever, double band, std::vector<Root>& roots,
-                         std::vector<bool>& met) {
+                         std::vector<bool>& met, std::vector<Joints>& visited) {
   Jacobian J;
   scaled_error(chain, target, root, lever, J);
   const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -156,6 +159,7 @@ inline void trace_valley(const Chain& chain, const Frame& target, const Joints& 
                      roots, met);
       }
       q = next, tangent = next_tangent, weak_error = next_weak;
+      visited.push_back(q);
       travelled += step;
       step = std::min(2.0 * step, kValleyStep);
       double from_root = 0.0;
@@ -171,23 +175,60 @@ inline void trace_valley(const Chain& chain, const Frame& target, const Joints& 
   }
 }
 
+// Whether q lies within a continuation step (rad, every joint) of a point a valley passed.
+inline bool on_traced_valley(const Joints& q, const std::vector<Joints>& visited) {
+  for (const Joints& point : visited) {
+    double apart = 0.0;
+    for (int j = 0; j < kDof; ++j) apart = std::max(apart, std::abs(wrap(q[j] - point[j])));
+    if (apart <= kValleyStep) return true;
+  }
+  return false;
+}
+
+// Whether the nearly singular point q (tolerance < sigma <= band) lies on a fold's valley rather
+// than a remnant of a curve: a fold's partner lies within a step (2 sigma / kappa), and along a
+// remnant's valley the weak error runs like a wave of the curve's length.
+inline bool near_fold(const Chain& chain, const Joints& q, double lever) {
+  Eigen::Matrix<double, kDof, 1> weak_direction;
+  return std::abs(fold_step(chain, q, lever, weak_direction)) <= kValleyStep;
+}
+
 // Roots along the valleys of the nearly singular roots (tolerance < sigma <= band: not on a
-// curve of solutions, whose every point verifies) that are no fold's (their fold partner,
-// fold_step, lies beyond a step), appended to `roots`; a valley is traced once (a root found on
-// a valley, or met on it, starts none of its own).
+// curve of solutions, whose every point verifies) that are no fold's (near_fold), appended to
+// `roots`; a valley is traced once (a root found on a valley, or met on it, starts none of its
+// own).
+//
+// Then the valleys that none of those roots lies on, from the elimination's starts (`starts`,
+// joint values of the pose itself): near a pose with curves of solutions the eigenvalues are
+// noise, and a start that settles on no root can still lie near a valley (the folded
+// M-430iA/2P, q3 = -179.97 deg, its target rounded to 10 significant digits: two closed valleys
+// of 4 roots each, the elimination's roots on one of them only; of its 14 starts, 6 lie on the
+// other). Each start is moved onto its valley's floor (settle_across on the directions whose
+// singular values exceed the band: across the valley, not along it); where it lands on a nearly
+// singular point of no valley traced yet, that valley is traced from there.
 inline void valley_roots(const Chain& chain, const Frame& target, double tolerance, double lever,
-                         double band, std::vector<Root>& roots) {
+                         double band, const std::vector<Joints>& starts,
+                         std::vector<Root>& roots) {
   std::vector<bool> met(roots.size(), false);
+  std::vector<Joints> visited;
+  bool traced = false;
   for (std::size_t index = 0; index < roots.size(); ++index) {
     if (met[index]) continue;
     if (!(roots[index].sigma <= band && roots[index].sigma > tolerance)) continue;
-    // a fold's root, whose partner lies within a step (2 sigma / kappa), is no remnant of a
-    // curve: along a remnant's valley the weak error runs like a wave of the curve's length
-    Eigen::Matrix<double, kDof, 1> weak_direction;
-    if (std::abs(fold_step(chain, roots[index].q, lever, weak_direction)) <= kValleyStep) continue;
+    if (near_fold(chain, roots[index].q, lever)) continue;
     met[index] = true;
+    traced = true;
     const Joints start = roots[index].q;
-    trace_valley(chain, target, start, tolerance, lever, band, roots, met);
+    trace_valley(chain, target, start, tolerance, lever, band, roots, met, visited);
+  }
+  if (!traced) return;  // no remnant of a curve at this pose
+  for (const Joints& start : starts) {
+    Joints q = start;
+    settle_across(chain, target, q, lever, band);
+    if (!std::isfinite(q[0]) || on_traced_valley(q, visited)) continue;
+    const double sigma = smallest_singular(chain, q, lever, band);
+    if (!(sigma <= band && sigma > tolerance) || near_fold(chain, q, lever)) continue;
+    trace_valley(chain, target, q, tolerance, lever, band, roots, met, visited);
   }
 }
 

@@ -9,7 +9,8 @@ within the limits (fixed seed, Pinocchio FK on the table) are solved one call at
 mean and upper quantiles of the per-call time, the share of poses and of the total time above
 10, 100 and 1000 us, and the same against the number of branches the ideal model solves (a pose
 whose ideal model misses branches has long shots: candidates clamped onto a reach boundary that
-the pipeline chases on the exact chain before it drops them). The mean is what ``ik_batch``
+the pipeline chases on the exact chain before it drops them, unless cpp/dhkin/reach_bound.hpp
+shows that the exact chain cannot reach them). The mean is what ``ik_batch``
 pays per pose; the median is the single-call figure of scripts/bench_ik.py.
 """
 

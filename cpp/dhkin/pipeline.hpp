@@ -25,7 +25,9 @@
 //
 // `clamp`: reach conditions violated by at most tolerance x (1 + lever) + twice the model
 // deviation are clamped onto their boundary, polished and verified, not rejected: a pose whose
-// joint values verify is never answered empty.
+// joint values verify is never answered empty. On a refined table a branch beyond the band (a
+// long shot) is still chased from its clamped candidate, unless reach_bound.hpp shows that the
+// exact chain cannot reach it.
 #pragma once
 
 #include <algorithm>
@@ -35,6 +37,7 @@
 #include "dhkin/members.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
+#include "dhkin/reach_bound.hpp"
 #include "dhkin/refined_direct.hpp"
 #include "dhkin/roots.hpp"
 #include "dhkin/settle.hpp"
@@ -59,6 +62,23 @@ inline void pipeline_branches(const Plan& plan, const TargetFrames& frames, cons
     info.why = found.why;
     regular.q = found.q, regular.valid = found.valid, regular.flags = found.flags;
     regular.near = found.near;
+    regular.chased.fill(true);
+    if (plan.refine) {
+      // long shots (reach_bound.hpp): one away from every singular set that the exact chain
+      // cannot reach is not chased
+      bool long_shots = false;
+      for (int b = 0; b < kBranches; ++b) {
+        long_shots = long_shots || (!found.valid[b] && (found.near[b] & kClamped) != 0 &&
+                                    (found.near[b] & kFree) == 0 && finite(found.q[b]));
+      }
+      if (long_shots) {
+        const std::array<bool, kBranches> in_reach =
+            long_shots_in_reach(plan, T_dh, found.why, found.valid, tolerance);
+        for (int b = 0; b < kBranches; ++b) {
+          regular.chased[b] = found.valid[b] || (found.near[b] & kFree) != 0 || in_reach[b];
+        }
+      }
+    }
   }
   branches.q = regular.q;
   branches.flags = regular.flags;
@@ -127,8 +147,8 @@ inline void pipeline_branches(const Plan& plan, const TargetFrames& frames, cons
         best_rotation = std::min(best_rotation, error.rotation);
       }
     }
-    const bool long_shot = !regular.valid[b] && plan.refine && finite(branches.q[b]) &&
-                           (regular.near[b] & kClamped) != 0;
+    const bool long_shot = !regular.valid[b] && regular.chased[b] && plan.refine &&
+                           finite(branches.q[b]) && (regular.near[b] & kClamped) != 0;
     if (branches.ok[b] && released[b] && regular.valid[b] && plan.refine) {
       // the seeded candidate verified only with its free joint released: the regular candidate
       // may reach another root of the pose (an extra; the seeded root, nearest the seed, stays)

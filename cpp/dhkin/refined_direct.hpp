@@ -5,8 +5,10 @@
 // ideal model's closed form, each candidate settled by Newton on the exact chain and verified, the
 // seed's root looked for (seed_root), the flags set. That holds when no candidate lies within the
 // seed band of a singularity (no `near` bit of a free joint: no seeded candidate, no valley scan),
-// no branch is a long shot (a candidate clamped onto a reach boundary that the ideal model cannot
-// reach: the pipeline chases those by continuation and corrected-target retries), every
+// no branch is a long shot that the exact chain may reach (a candidate clamped onto a reach
+// boundary that the ideal model cannot reach: the pipeline chases those by refinement and
+// corrected-target retries, except where reach_bound.hpp shows the exact chain cannot reach the
+// branch either), every
 // candidate settles as Newton does near a regular root (refine_lanes; no polish, continuation or
 // retry then applies) and verifies, and no two branches give one solution (no merge, no twin
 // search). direct_refined_branches does those steps with the eight branches in lanes
@@ -24,6 +26,7 @@
 #include "dhkin/direct.hpp"
 #include "dhkin/newton_lanes.hpp"
 #include "dhkin/plan.hpp"
+#include "dhkin/reach_bound.hpp"
 #include "dhkin/roots.hpp"
 
 namespace dhkin {
@@ -50,7 +53,19 @@ inline bool direct_refined_branches(const Plan& plan, const TargetFrames& frames
     case LaneStart::irregular: return false;  // a seeded candidate to try
     case LaneStart::solved: break;
   }
-  if (any(!found.valid && found.clamped && finite_lanes(found.q))) return false;  // a long shot
+  const Mask long_shots = !found.valid && found.clamped && finite_lanes(found.q);
+  if (any(long_shots)) {
+    // a long shot that the exact chain may reach (reach_bound.hpp; every candidate here is away
+    // from the singular sets) is chased by the pipeline; one it cannot reach is not chased there
+    // either
+    std::array<bool, kBranches> valid;
+    for (int b = 0; b < kBranches; ++b) valid[b] = lane(found.valid, b);
+    const std::array<bool, kBranches> in_reach =
+        long_shots_in_reach(plan, targets.T_dh, found.why, valid, tolerance);
+    for (int b = 0; b < kBranches; ++b) {
+      if (lane(long_shots, b) && in_reach[b]) return false;
+    }
+  }
   JointsT<Lanes> q = wrapped_branches(plan, found);
   const LaneRefinement refined =
       refine_lanes(plan.chain, ChainShape(plan.chain), targets.T_at, q, found.valid, tolerance);

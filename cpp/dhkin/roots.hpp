@@ -272,6 +272,8 @@ struct Regular {
   std::array<bool, kBranches> valid{};
   std::array<std::uint8_t, kBranches> flags{};
   std::array<std::uint8_t, kBranches> near{};
+  // false for a long shot that the exact chain cannot reach (reach_bound.hpp): not chased
+  std::array<bool, kBranches> chased{};
 };
 
 // A refined table's branch that did not settle, or that settled on another branch's solution, is
@@ -285,7 +287,7 @@ inline void retry_corrected(const Plan& plan, const Frame& T_dh, const Frame& T_
                             const Regular& regular, Branches& branches) {
   Candidates candidates;
   for (int b = 0; b < kBranches; ++b) {
-    if (branches.ok[b] || !finite(regular.q[b]) ||
+    if (branches.ok[b] || !regular.chased[b] || !finite(regular.q[b]) ||
         !(regular.valid[b] || (regular.near[b] & kClamped) != 0)) {
       continue;
     }
@@ -294,6 +296,10 @@ inline void retry_corrected(const Plan& plan, const Frame& T_dh, const Frame& T_
       const Frame corrected = corrected_target(plan.ideal, plan.chain, start, T_dh);
       plan.solve_family(corrected, seed, 0, clamp, candidates);
       if (!finite(candidates.q[b])) break;
+      // the ideal model has no root for the corrected target on this branch even within the
+      // clamp band: no start to retry from (its clamped candidate would only repeat the long
+      // shot's chase from another point beyond the reach)
+      if (!candidates.valid[b]) break;
       start = candidates.q[b];
       Joints trial = start;
       refine(plan.chain, T_at, trial, JointMask{}, tolerance);

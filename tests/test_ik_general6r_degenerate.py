@@ -189,6 +189,42 @@ def test_near_fold_roots_all_returned() -> None:
         assert not check_pose(robot, model, RootReference(robot, model, starts=STARTS), q)
 
 
+#: Folded M-430iA/2P poses (q3 = 180 deg: axes 2 and 5 coincide, q2 + q5 fixed) that
+#: `dhkin validate` answered empty on the rounded description: the elimination's members of the
+#: curve lie beyond the limits (q2 = +-180 or q5 = +-180 deg) and, the curve broken into a
+#: valley by the rounding, could not walk into them.
+M430_FOLDED_ROUNDED = [(90, 90, 180, 0, 90, -90), (90, 90, 180, 0, 90, 0)]
+
+
+def test_folded_members_walk_into_the_limits_on_a_rounded_description() -> None:
+    """Targets by Pinocchio on the generated URDF rounded to 10 significant digits: unseeded
+    the answer is not empty, seeded with q it holds q (to the rounding over sigma: q is on a curve
+    of the table, and the rounded target lies 2.5e-10 off it), and every solution is exact on the
+    table (Pinocchio on the generated URDF)."""
+    robot = dhkin.load("fanuc_m430ia2p")
+    model = target_model(robot, "rounded")
+    failures = []
+    for pose in M430_FOLDED_ROUNDED:
+        q = np.radians(pose)
+        T = model.fk(q)
+        position, rotation = oracle_errors(robot, q[None], T[None])
+        offset = max(float(position[0]), float(rotation[0]))
+        for label, seed in (("none", None), ("q", q)):
+            answer = np.asarray(robot.ik(T, q_seed=seed).q).reshape(-1, 6)
+            where = f"{pose}, seed {label}"
+            if not len(answer):
+                failures.append(f"{where}: nothing returned")
+                continue
+            position, rotation = oracle_errors(robot, answer, np.repeat(T[None], len(answer), 0))
+            if max(position.max(), rotation.max()) > TOLERANCE:
+                failures.append(f"{where}: a solution is not exact on the table")
+            if seed is not None:
+                nearest = np.abs(wrapped(answer - q)).max(axis=1).min()
+                if nearest > JOINT_TOLERANCE + offset:
+                    failures.append(f"{where}: q not returned ({nearest:.2e} rad away)")
+    assert not failures, "\n".join(failures)
+
+
 def test_curve_members_follow_the_seed_on_a_rounded_description() -> None:
     """Targets by Pinocchio on the rounded generated URDF (where the defect was found) and on the
     vendor URDF. Unseeded, seeded with the sampled q and with the seed moved, every solution is

@@ -77,7 +77,9 @@ inline Joints box_point(const Limits& limits, const Joints& q, double& outside) 
 // alternating projections, which reach a point of both where the curve of solutions crosses
 // into the box), while each pass brings it nearer the box by more than the tolerance. A folded
 // M-430iA/2P (q3 = 180 deg, links 2 and 3 equally long: q2 free) has members nearest q = 0 at
-// q5 = 180 deg or q2 = -180 deg, beyond its limits, and members within them.
+// q5 = 180 deg or q2 = -180 deg, beyond its limits, and members within them. Here a member also
+// walks a valley's verifying floor (walk's `floors`: a target a hair off such a pose): the root
+// has no copy within the limits, so no in-limit root is given up for the floor's member.
 inline void walk_into_limits(const Chain& chain, const Frame& target, const Limits& limits,
                              double margin, double tolerance, double lever, double band,
                              Joints& q, PoseError& error) {
@@ -87,7 +89,8 @@ inline void walk_into_limits(const Chain& chain, const Frame& target, const Limi
     Joints moved = q;
     PoseError moved_error = error;
     const Projection projection = project(chain, target, goal, tolerance, lever, band);
-    nearest_member(chain, target, goal, projection, tolerance, lever, band, moved, moved_error);
+    nearest_member(chain, target, goal, projection, tolerance, lever, band, moved, moved_error,
+                   true);
     double moved_outside = 0.0;
     const Joints next_goal = box_point(limits, moved, moved_outside);
     if (!(moved_outside < outside - tolerance)) return;

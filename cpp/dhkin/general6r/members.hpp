@@ -109,13 +109,16 @@ inline PoseError settle_across(const Chain& chain, const Frame& target, Joints& 
 // Newton could land on a distinct root nearer the seed); a failed step is retried a quarter as
 // long, down to `band`, and the walk ends where the seed's offset along the weak directions is
 // within `tolerance` (rad). On a curve of solutions a step stays on it when its refined midpoint
-// lies near its chord (kChordBend). Then polished by monotone Newton steps. `error`: the
-// residuals of the final q, where it moved.
+// lies near its chord (kChordBend); with `floors`, so does a step along a nearly singular
+// root's valley whose floor verifies. Then polished by monotone Newton steps (across the curve
+// or floor only). `error`: the residuals of the final q, where it moved.
 inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joints& seed,
-                 double tolerance, double lever, double band, PoseError& error) {
+                 double tolerance, double lever, double band, PoseError& error,
+                 bool floors = false) {
   double distance = squared_distance(q, seed);
   double length = newton::kMaxJointStep;
   bool on_curve = false;  // q lies on a curve of solutions (sigma_min within the tolerance)
+  bool on_floor = false;  // the last step kept walked a valley's verifying floor
   for (int trial_step = 0; trial_step < kWalkSteps; ++trial_step) {
     const Jacobian J = scaled_jacobian(chain, q, lever);
     const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullV);
@@ -132,9 +135,27 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     const double scale = longest > length ? length / longest : 1.0;
     Joints trial, middle;
     for (int j = 0; j < kDof; ++j) trial[j] = q[j] + scale * step(j);
+    // across: the step is settled only across the weak directions (flat: singular values up to
+    // it are left alone). On a curve, those within the tolerance. Off one (sigma within the band)
+    // with `floors`, first those within the band: a target a hair off a pose with a curve of
+    // solutions (a description rounded to 10 significant digits, 2.6e-10 m off a folded
+    // M-430iA/2P's table) leaves a valley whose floor still verifies, and a step along it is a
+    // member as on a curve (Newton would slide it back to the valley's isolated root); where the
+    // floor does not verify (an isolated root's valley), Newton as before.
+    double flat = tolerance;
+    bool across = on_curve;
+    if (!on_curve && floors) {
+      Joints floor = trial;
+      settle_across(chain, target, floor, lever, band);
+      if (check(chain, floor.data(), target).within(tolerance)) {
+        trial = floor;
+        flat = band;
+        across = true;
+      }
+    }
     if (on_curve) {
       settle_across(chain, target, trial, lever, tolerance);
-    } else {
+    } else if (!across) {
       refine(chain, target, trial, JointMask{}, tolerance, {kMemberBudget, newton::kGrowth, 0.0});
     }
     const PoseError trial_error = check(chain, trial.data(), target);
@@ -145,13 +166,14 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
       chord = std::max(chord, std::abs(wrap(trial[j] - q[j])));
     }
     bool kept = trial_error.within(tolerance) && trial_distance < distance && chord > 0.0;
-    if (kept && !on_curve) {
+    if (kept && !across) {
       // an isolated (near-)singular root's cloud: the midpoint itself verifies
       kept = check(chain, middle.data(), target).within(tolerance);
     } else if (kept) {
-      // on a curve of solutions: the midpoint, moved across the curve, verifies near the chord
+      // on a curve of solutions (or a valley's verifying floor): the midpoint, moved across it,
+      // verifies near the chord
       const Joints midpoint = middle;
-      settle_across(chain, target, middle, lever, tolerance);
+      settle_across(chain, target, middle, lever, flat);
       double moved = 0.0;
       for (int j = 0; j < kDof; ++j) {
         moved = std::max(moved, std::abs(wrap(middle[j] - midpoint[j])));
@@ -166,14 +188,15 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     q = wrapped(trial);
     distance = trial_distance;
     error = trial_error;
+    on_floor = flat == band;
     length = std::min(2.0 * length, newton::kMaxJointStep);
   }
   // polish: monotone Newton steps from the member reached (Newton converges slowly at a singular
   // root; these bring its residual to kRefineFraction of the tolerance); on a curve only across
   // it (along it Newton would slide the member off the seed)
   Joints trial = q;
-  if (on_curve) {
-    settle_across(chain, target, trial, lever, tolerance);
+  if (on_curve || on_floor) {
+    settle_across(chain, target, trial, lever, on_curve ? tolerance : band);
   } else {
     refine(chain, target, trial, JointMask{}, refine_tolerance(tolerance, lever),
            {kMemberBudget, newton::kMonotone, 0.0});
@@ -245,14 +268,14 @@ inline Projection project(const Chain& chain, const Frame& target, const Joints&
 // near, not at, the member nearest the point). `point` is never a root of its own.
 inline void nearest_member(const Chain& chain, const Frame& target, const Joints& point,
                            const Projection& projection, double tolerance, double lever,
-                           double band, Joints& q, PoseError& error) {
-  walk(chain, target, q, point, tolerance, lever, band, error);
+                           double band, Joints& q, PoseError& error, bool floors = false) {
+  walk(chain, target, q, point, tolerance, lever, band, error, floors);
   if (projection.reached &&
       squared_distance(projection.q, point) < squared_distance(q, point) &&
       on_segment(chain, target, q, projection.q, tolerance, lever, band)) {
     q = wrapped(projection.q);
     error = projection.error;
-    walk(chain, target, q, point, tolerance, lever, band, error);
+    walk(chain, target, q, point, tolerance, lever, band, error, floors);
   }
 }
 

@@ -61,38 +61,56 @@ inline Matrix12 homogeneous(const Matrix12& A, const Matrix12& B, const Matrix12
   return A + B * y + C * (y * y);
 }
 
-// In-place LU with partial pivoting of M (L unit lower, U upper; row k swapped with pivots[k]).
-// A pivot of exactly zero (M singular in the arithmetic: the eigenvalue exact) is replaced by
-// rounding's size, eps |M|, as inverse iteration does, so that the solve amplifies the null
-// direction instead of failing.
-inline void lu_factor(Matrix12& M, std::array<int, kMonomials>& pivots) {
+// M's LU factors with partial pivoting: L (unit lower, its unit diagonal implicit) and U
+// (upper), each stored with zeros elsewhere, so that the factorisation and the solves run on
+// whole fixed-size columns (Eigen's vector kernels: the loops on the shrinking tails of M were
+// a tenth of a CRX-10iA pose's time); row k was swapped with pivots[k].
+struct LU {
+  Matrix12 L, U;
+  std::array<int, kMonomials> pivots;
+};
+
+// The LU factors of M (destroyed). A pivot of exactly zero (M singular in the arithmetic: the
+// eigenvalue exact) is replaced by rounding's size, eps |M|, as inverse iteration does, so that
+// the solve amplifies the null direction instead of failing.
+inline void lu_factor(Matrix12& M, LU& out) {
   const double tiny = std::max(M.cwiseAbs().maxCoeff() * std::numeric_limits<double>::epsilon(),
                                1e-300);
+  out.L.setZero();
   for (int k = 0; k < kMonomials; ++k) {
     const int below = kMonomials - 1 - k;
     Eigen::Index p = 0;
     M.col(k).tail(below + 1).cwiseAbs().maxCoeff(&p);
-    pivots[k] = k + static_cast<int>(p);
-    if (pivots[k] != k) M.row(k).swap(M.row(pivots[k]));
+    out.pivots[k] = k + static_cast<int>(p);
+    if (out.pivots[k] != k) {
+      M.row(k).swap(M.row(out.pivots[k]));
+      out.L.row(k).swap(out.L.row(out.pivots[k]));
+    }
     if (M(k, k) == 0.0) M(k, k) = tiny;
     if (below == 0) break;
-    M.col(k).tail(below) /= M(k, k);
-    M.bottomRightCorner(below, below).noalias() -=
-        M.col(k).tail(below) * M.row(k).tail(below);
+    // the multipliers, zeros at and above row k: subtracting them times row k leaves rows
+    // 0 .. k exactly as they are (x - a * 0 = x)
+    Vector12 multipliers = M.col(k) / M(k, k);
+    multipliers.head(k + 1).setZero();
+    out.L.col(k) = multipliers;
+    for (int j = k + 1; j < kMonomials; ++j) M.col(j) -= M(k, j) * multipliers;
   }
+  out.U = M.triangularView<Eigen::Upper>();
 }
 
 // v <- M^-1 v from lu_factor's factors (column by column: contiguous in Eigen's storage).
-inline void lu_solve(const Matrix12& LU, const std::array<int, kMonomials>& pivots, Vector12& v) {
+inline void lu_solve(const LU& lu, Vector12& v) {
   for (int k = 0; k < kMonomials; ++k) {
-    if (pivots[k] != k) std::swap(v(k), v(pivots[k]));
+    if (lu.pivots[k] != k) std::swap(v(k), v(lu.pivots[k]));
   }
-  for (int k = 0; k + 1 < kMonomials; ++k) {
-    v.tail(kMonomials - 1 - k) -= v(k) * LU.col(k).tail(kMonomials - 1 - k);
-  }
+  for (int k = 0; k + 1 < kMonomials; ++k) v -= v(k) * lu.L.col(k);
   for (int i = kMonomials - 1; i >= 0; --i) {
-    v(i) /= LU(i, i);
-    if (i > 0) v.head(i) -= v(i) * LU.col(i).head(i);
+    v(i) /= lu.U(i, i);
+    if (i > 0) {
+      const double value = v(i);
+      v -= value * lu.U.col(i);
+      v(i) = value;  // the column's own diagonal entry undone
+    }
   }
 }
 
@@ -101,11 +119,11 @@ inline void lu_solve(const Matrix12& LU, const std::array<int, kMonomials>& pivo
 inline bool null_vector(const Matrix12& A, const Matrix12& B, const Matrix12& C, double half,
                         Vector12& out) {
   Matrix12 M = homogeneous(A, B, C, half);
-  std::array<int, kMonomials> pivots;
-  lu_factor(M, pivots);
+  LU lu;
+  lu_factor(M, lu);
   out.setOnes();
   for (int step = 0; step < kInverseIterations; ++step) {
-    lu_solve(M, pivots, out);
+    lu_solve(lu, out);
     const double size = out.cwiseAbs().maxCoeff();
     if (!(size > 0.0 && size < INFINITY)) return false;
     out /= size;
@@ -128,8 +146,8 @@ inline bool null_space(const Matrix12& A, const Matrix12& B, const Matrix12& C, 
                        int m, Basis& out) {
   Matrix12 M = homogeneous(A, B, C, half);
   if (!M.allFinite()) return false;
-  std::array<int, kMonomials> pivots;
-  lu_factor(M, pivots);
+  LU lu;
+  lu_factor(M, lu);
   out.resize(kMonomials, m);
   for (int c = 0; c < m; ++c) {  // generic directions: no monomial pattern, independent
     for (int i = 0; i < kMonomials; ++i) out(i, c) = std::cos(1.0 + (i + 1) * (c + 0.6180339887));
@@ -137,7 +155,7 @@ inline bool null_space(const Matrix12& A, const Matrix12& B, const Matrix12& C, 
   for (int step = 0; step < kBlockIterations; ++step) {
     for (int c = 0; c < m; ++c) {
       Vector12 column = out.col(c);
-      lu_solve(M, pivots, column);
+      lu_solve(lu, column);
       out.col(c) = column;
     }
     for (int c = 0; c < m; ++c) {

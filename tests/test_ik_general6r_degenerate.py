@@ -197,21 +197,23 @@ M430_FOLDED_ROUNDED = [(90, 90, 180, 0, 90, -90), (90, 90, 180, 0, 90, 0)]
 
 
 def test_folded_members_walk_into_the_limits_on_a_rounded_description() -> None:
-    """Targets by Pinocchio on the generated URDF rounded to 10 significant digits: unseeded
-    the answer is not empty, seeded with q it holds q (to the rounding over sigma: q is on a curve
-    of the table, and the rounded target lies 2.5e-10 off it), and every solution is exact on the
-    table (Pinocchio on the generated URDF)."""
+    """Targets by Pinocchio on the generated URDF rounded to 10 significant digits (and, as a
+    control, on the vendor URDF and the generated one): unseeded the answer is not empty, seeded
+    with q it holds q (to the target's offset from the table: q is on a curve of the table, and
+    the rounded target lies 2.5e-10 off it), and every solution is exact on the table (Pinocchio
+    on the generated URDF)."""
     robot = dhkin.load("fanuc_m430ia2p")
-    model = target_model(robot, "rounded")
     failures = []
-    for pose in M430_FOLDED_ROUNDED:
+    for model, pose in ((model, pose) for model in (target_model(robot, "rounded"),
+                                                    *models(robot))
+                        for pose in M430_FOLDED_ROUNDED):
         q = np.radians(pose)
         T = model.fk(q)
         position, rotation = oracle_errors(robot, q[None], T[None])
         offset = max(float(position[0]), float(rotation[0]))
         for label, seed in (("none", None), ("q", q)):
             answer = np.asarray(robot.ik(T, q_seed=seed).q).reshape(-1, 6)
-            where = f"{pose}, seed {label}"
+            where = f"{model.description} {pose}, seed {label}"
             if not len(answer):
                 failures.append(f"{where}: nothing returned")
                 continue

@@ -142,22 +142,22 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     // M-430iA/2P's table) leaves a valley whose floor still verifies, and a step along it is a
     // member as on a curve (Newton would slide it back to the valley's isolated root); where the
     // floor does not verify (an isolated root's valley), Newton as before.
-    double flat = tolerance;
-    bool across = on_curve;
-    if (!on_curve && floors) {
-      Joints floor = trial;
-      settle_across(chain, target, floor, lever, band);
-      if (check(chain, floor.data(), target).within(tolerance)) {
-        trial = floor;
-        flat = band;
-        across = true;
-      }
-    }
+    bool floor_step = false;
     if (on_curve) {
       settle_across(chain, target, trial, lever, tolerance);
-    } else if (!across) {
-      refine(chain, target, trial, JointMask{}, tolerance, {kMemberBudget, newton::kGrowth, 0.0});
+    } else {
+      Joints floor = trial;
+      if (floors) settle_across(chain, target, floor, lever, band);
+      floor_step = floors && check(chain, floor.data(), target).within(tolerance);
+      if (floor_step) {
+        trial = floor;
+      } else {
+        refine(chain, target, trial, JointMask{}, tolerance,
+               {kMemberBudget, newton::kGrowth, 0.0});
+      }
     }
+    const bool across = on_curve || floor_step;
+    const double flat = floor_step ? band : tolerance;
     const PoseError trial_error = check(chain, trial.data(), target);
     const double trial_distance = squared_distance(trial, seed);
     double chord = 0.0;
@@ -188,7 +188,7 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     q = wrapped(trial);
     distance = trial_distance;
     error = trial_error;
-    on_floor = flat == band;
+    on_floor = floor_step;
     length = std::min(2.0 * length, newton::kMaxJointStep);
   }
   // polish: monotone Newton steps from the member reached (Newton converges slowly at a singular

@@ -225,7 +225,7 @@ inline void valley_roots(const Chain& chain, const Frame& target, double toleran
   for (const Joints& start : starts) {
     Joints q = start;
     settle_across(chain, target, q, lever, band);
-    if (!std::isfinite(q[0]) || on_traced_valley(q, visited)) continue;
+    if (!finite(q) || on_traced_valley(q, visited)) continue;
     const double sigma = smallest_singular(chain, q, lever, band);
     if (!(sigma <= band && sigma > tolerance) || near_fold(chain, q, lever)) continue;
     trace_valley(chain, target, q, tolerance, lever, band, roots, met, visited);

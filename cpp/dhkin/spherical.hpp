@@ -221,7 +221,10 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
 // merged): there the two elbow branches are one, so a seeded wrist settles on its own arm. A
 // hair farther off (psi ~1e-4, anthropomorphic arm) the same bound would seed wrists 1e-4 rad
 // off the singularity, whose settling crosses to the other elbow branch or moves the arm along
-// the double singularity's band of near-solutions (duplicate answers).
+// the double singularity's band of near-solutions (duplicate answers). Nor where the wrist
+// centre is within the seed band of axis 2 (q2 free; the factor L3 / distance unbounded there):
+// seeding the wrist beside q2 moved the answer off the seed's q2 (anthropomorphic arm folded,
+// tests/test_validate.py).
 template <class V>
 DHKIN_INLINE V elbow_uncertainty(const SphericalGeometry& g, V distance, V sine_scaled,
                                  double clamp) {
@@ -300,7 +303,9 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
     elbow_flag[s] = bits_if(merged[s] || sine_scaled[s] <= kFlagBand * 2 * upper * fore, kElbow);
     elbow_near[s] = bits_if(distance <= request.seed_length, kElbow);
     elbow_seeded[s] = elbow_near[s] != 0 && (request.use_seed & kElbow) != 0;
-    arm_uncertainty[s] = elbow_uncertainty(g, distance, sine_scaled[s], request.clamp);
+    // not where q2 is free (the centre on axis 2: the elbow's own seeded candidate)
+    arm_uncertainty[s] = select(elbow_near[s] != 0, V(0.0),
+                                elbow_uncertainty(g, distance, sine_scaled[s], request.clamp));
   }
   V turn2[4], turn3[4], turn23[4];
   SinCosT<V> t3[4];

@@ -21,8 +21,8 @@
 namespace dhkin {
 
 // The caller's arrays for N poses: q (N, kBranches, kDof), valid, branch, flags (N, kBranches),
-// errors (N, kBranches, 2), projection and dropped (N). Slots a pose does not fill are left as
-// they are (the caller gives them zeros, and branch -1).
+// errors (N, kBranches, 2), projection and dropped (N). The caller gives every slot its empty
+// values (zeros, and branch -1); a pose leaves the slots it does not fill with those values.
 struct NearestOutputs {
   double* q;
   bool* valid;
@@ -70,7 +70,14 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
   for (int b = 0; b < kBranches; ++b) {
     Mask found = answer.ok[b];
     std::memcpy(exists[b], &found.v, sizeof exists[b]);
-    if (!any(found)) continue;
+    if (!any(found)) {  // defined values for the loop below (which writes, then drops them)
+      std::memset(q[b], 0, sizeof q[b]);
+      std::memset(recheck[b], 0, sizeof recheck[b]);
+      std::memset(flags[b], 0, sizeof flags[b]);
+      std::memset(position[b], 0, sizeof position[b]);
+      std::memset(rotation[b], 0, sizeof rotation[b]);
+      continue;
+    }
     Mask clipped = every_lane<Lanes>(false);
     for (int j = 0; j < kDof; ++j) {
       const bool revolute = plan.revolute(j);
@@ -89,22 +96,44 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
     answer.errors[b].position.store(position[b]);
     answer.errors[b].rotation.store(rotation[b]);
   }
+  // pose by pose: each solution written straight into its slot; a branch without a copy is
+  // written too and then overwritten by the next one (its slot does not advance), so the loop
+  // does not branch on which copies exist (they vary from pose to pose). The slot past the last
+  // solution is given back its empty values (the caller's zeros, branch -1) where it was
+  // written over.
   for (int l = 0; l < count; ++l) {
     if (!answer.answered[l]) continue;
     const std::size_t i = first + static_cast<std::size_t>(l);
+    const std::size_t row = i * kBranches;
+    double* const q_out = out.q + row * kDof;
+    double* const errors_out = out.errors + 2 * row;
     int slot = 0;
+    bool spoiled = false;  // slot `slot` holds a branch without a copy
     for (int b = 0; b < kBranches; ++b) {
-      if (exists[b][l] == 0) continue;
-      Solution solution;
-      for (int j = 0; j < kDof; ++j) solution.q[j] = q[b][j][l];
-      solution.branch = b;
-      solution.flags = static_cast<std::uint8_t>(flags[b][l]);
-      solution.error = {position[b][l], rotation[b][l]};
-      if (recheck[b][l] != 0) {
-        solution.error = check(plan.chain, solution.q.data(), lane(answer.T_at, l));
-        if (!solution.error.within(tolerance)) continue;
+      const bool exists_b = exists[b][l] != 0;
+      double* const q_slot = q_out + slot * kDof;
+      for (int j = 0; j < kDof; ++j) q_slot[j] = q[b][j][l];
+      PoseError error{position[b][l], rotation[b][l]};
+      bool kept = exists_b;
+      if ((exists[b][l] & recheck[b][l]) != 0) {  // rare: no branch on exists_b alone
+        error = check(plan.chain, q_slot, lane(answer.T_at, l));
+        kept = error.within(tolerance);
       }
-      put(out, i, slot++, solution);
+      out.valid[row + slot] = true;
+      out.branch[row + slot] = static_cast<std::int16_t>(b);
+      out.flags[row + slot] = static_cast<std::uint8_t>(flags[b][l]);
+      errors_out[2 * slot] = error.position;
+      errors_out[2 * slot + 1] = error.rotation;
+      spoiled = !kept;
+      slot += kept ? 1 : 0;
+    }
+    if (spoiled && slot < kBranches) {
+      for (int j = 0; j < kDof; ++j) q_out[slot * kDof + j] = 0.0;
+      out.valid[row + slot] = false;
+      out.branch[row + slot] = -1;
+      out.flags[row + slot] = 0;
+      errors_out[2 * slot] = 0.0;
+      errors_out[2 * slot + 1] = 0.0;
     }
     out.projection[i] = answer.projection[l];
     out.dropped[i] = 0;
@@ -143,6 +172,10 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
     for (int j = 0; j < kDof; ++j) seed[j] = seeds[i * seed_stride + j];
     return seed;
   };
+  // one answer and one set of candidates for every block: each block writes every value that is
+  // read afterwards, and their zero initialisation (some 11 kB) is then paid once per call
+  BlockAnswer answer;
+  CandidatesT<Lanes> found;
   for (std::size_t first = 0; first < n; first += kLanes) {
     PoseBlock poses;
     poses.count = static_cast<int>(std::min<std::size_t>(kLanes, n - first));
@@ -150,9 +183,8 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
       poses.T[l] = T + 16 * (first + l);
       poses.seed[l] = seeds + (first + l) * seed_stride;
     }
-    BlockAnswer answer;
     if (!plan.refine) {
-      direct_block(plan, frames, poses, tolerance, answer);
+      direct_block(plan, frames, poses, tolerance, answer, found);
       batch::put_nearest(plan, answer, tolerance, out, first, poses.count, report);
     }
     for (int l = 0; l < poses.count; ++l) {

@@ -42,26 +42,33 @@ struct BlockAnswer {
 
 namespace block {
 
-// Frames by lane from kLanes frames: entry (r, c) of every lane at once.
-struct FrameColumns {
-  alignas(64) double R[3][3][kLanes];
-  alignas(64) double p[3][kLanes];
-
-  void put(int l, const Frame& f) {
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) R[r][c][l] = f.R[r][c];
-      p[r][l] = f.p[r];
+// pose_and_seed_status (direct.hpp) of kLanes poses at once, from their 16 entries (4 x 4
+// row-major) and seeds by lane: pose_status's tests on the same values in the same order, so
+// the same status in each lane.
+DHKIN_INLINE LaneBits pose_and_seed_status(const Lanes (&T)[16], const JointsT<Lanes>& seed) {
+  Mask finite = every_lane<Lanes>(true);
+  for (int k = 0; k < 16; ++k) finite = finite && abs(T[k]) < INFINITY;
+  const Lanes bottom = max(max(max(abs(T[12]), abs(T[13])), abs(T[14])), abs(T[15] - 1.0));
+  Lanes worst(0.0);  // orthonormality()
+  for (int a = 0; a < 3; ++a) {
+    for (int b = a; b < 3; ++b) {
+      const Lanes d = T[4 * a] * T[4 * b] + T[4 * a + 1] * T[4 * b + 1] +
+                      T[4 * a + 2] * T[4 * b + 2];
+      worst = max(worst, abs(d - (a == b ? 1.0 : 0.0)));
     }
   }
-  FrameT<Lanes> frames() const {
-    FrameT<Lanes> out;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) out.R[r][c] = Lanes::load(R[r][c]);
-      out.p[r] = Lanes::load(p[r]);
-    }
-    return out;
-  }
-};
+  const Lanes determinant = T[0] * (T[5] * T[10] - T[6] * T[9]) -
+                            T[1] * (T[4] * T[10] - T[6] * T[8]) +
+                            T[2] * (T[4] * T[9] - T[5] * T[8]);
+  Mask seed_finite = every_lane<Lanes>(true);
+  for (int j = 0; j < kDof; ++j) seed_finite = seed_finite && abs(seed[j]) < INFINITY;
+  LaneBits status(kUsable);
+  status = select(!seed_finite, LaneBits(kBadSeed), status);
+  status = select(!(worst <= kOrthonormalityGate) || determinant <= 0.0, LaneBits(kNotRotation),
+                  status);
+  status = select(!(bottom <= kBottomRowTolerance), LaneBits(kBottomRow), status);
+  return select(!finite, LaneBits(kNotFinite), status);
+}
 
 // Whether a and b hold the same bits in every lane.
 DHKIN_INLINE bool same_bits(const Lanes& a, const Lanes& b) { return !any(bits_of(a) != bits_of(b)); }
@@ -153,34 +160,39 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
 }
 
 // Steps 1-3 of the direct path for a block of poses of an exact-family table (plan.refine
-// false; the caller checks).
+// false; the caller checks). `found`: room for the closed form's candidates (the caller keeps it
+// from block to block; every value read is written first).
 inline void direct_block(const Plan& plan, const TargetFrames& frames, const PoseBlock& poses,
-                         double tolerance, BlockAnswer& out) {
+                         double tolerance, BlockAnswer& out, CandidatesT<Lanes>& found) {
   tolerance = plan.verification_tolerance(tolerance);
-  block::FrameColumns raw;
+  // the poses' 16 entries and the seeds by lane, then pose_and_seed_status in lanes
+  alignas(64) double entries[16][kLanes];
   alignas(64) double seeds[kDof][kLanes];
-  Mask declined = every_lane<Lanes>(false);
   for (int l = 0; l < kLanes; ++l) {
     const int i = l < poses.count ? l : poses.count - 1;
-    Joints seed;
-    for (int j = 0; j < kDof; ++j) seed[j] = seeds[j][l] = poses.seed[i][j];
-    out.status[l] = pose_and_seed_status(poses.T[i], seed);
-    if (out.status[l] == kUsable) {
-      raw.put(l, raw_frame(poses.T[i]));
-    } else {
-      raw.put(l, Frame{});  // the identity where the pose is rejected
-      set_lane(declined, l, true);  // rejected: the caller reports it
-      for (int j = 0; j < kDof; ++j) seeds[j][l] = 0.0;
-    }
+    for (int k = 0; k < 16; ++k) entries[k][l] = poses.T[i][k];
+    for (int j = 0; j < kDof; ++j) seeds[j][l] = poses.seed[i][j];
   }
-  for (int j = 0; j < kDof; ++j) out.seed[j] = Lanes::load(seeds[j]);
+  Lanes T[16];
+  for (int k = 0; k < 16; ++k) T[k] = Lanes::load(entries[k]);
+  JointsT<Lanes> seed;
+  for (int j = 0; j < kDof; ++j) seed[j] = Lanes::load(seeds[j]);
+  const LaneBits status = block::pose_and_seed_status(T, seed);
+  Mask declined = status != kUsable;  // rejected: the caller reports it
+  for (int l = 0; l < kLanes; ++l) out.status[l] = lane(status, l);
+  // the identity and zero seeds where the pose is rejected
+  FrameT<Lanes> raw;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) raw.R[r][c] = select(declined, Lanes(r == c ? 1.0 : 0.0), T[4 * r + c]);
+    raw.p[r] = select(declined, Lanes(0.0), T[4 * r + 3]);
+  }
+  for (int j = 0; j < kDof; ++j) out.seed[j] = select(declined, Lanes(0.0), seed[j]);
   // the rotations projected, every lane at once (projected_pose's, lane by lane)
   Lanes moved;
-  const FrameT<Lanes> projected = projected_frame<Lanes>(raw.frames(), !declined, moved);
+  const FrameT<Lanes> projected = projected_frame<Lanes>(raw, !declined, moved);
   for (int l = 0; l < kLanes; ++l) out.projection[l] = lane(declined, l) ? 0.0 : lane(moved, l);
   FrameT<Lanes> T_dh;
   targets_of(frames, projected, T_dh, out.T_at);
-  CandidatesT<Lanes> found;
   plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
   out.why = found.why;
   for (int b = 0; b < kBranches; ++b) declined = declined || (found.near[b] & kFree) != 0;

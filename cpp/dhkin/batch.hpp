@@ -43,6 +43,22 @@ struct BatchReport {
 
 namespace batch {
 
+// to[j] = from[j * kLanes] for the kDof joints: one joint vector out of a by-joint, by-lane array.
+// The output arrays are fresh memory, where stores cost most: with AVX-512 the joint vector is
+// gathered and written by one masked store.
+DHKIN_INLINE void put_joints(double* to, const double* from) {
+#if defined(__AVX512F__)
+  static_assert(kDof <= 8, "one vector");
+  const __m512i index = _mm512_set_epi64(0, 0, 5 * kLanes, 4 * kLanes, 3 * kLanes, 2 * kLanes,
+                                         kLanes, 0);
+  const __mmask8 joints = static_cast<__mmask8>((1u << kDof) - 1);
+  const __m512d values = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), joints, index, from, 8);
+  _mm512_mask_storeu_pd(to, joints, values);
+#else
+  for (int j = 0; j < kDof; ++j) to[j] = from[j * kLanes];
+#endif
+}
+
 // Slot `slot` of pose i gets `solution`.
 inline void put(const NearestOutputs& out, std::size_t i, int slot, const Solution& solution) {
   const std::size_t k = i * kBranches + static_cast<std::size_t>(slot);
@@ -112,7 +128,7 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
     for (int b = 0; b < kBranches; ++b) {
       const bool exists_b = exists[b][l] != 0;
       double* const q_slot = q_out + slot * kDof;
-      for (int j = 0; j < kDof; ++j) q_slot[j] = q[b][j][l];
+      put_joints(q_slot, &q[b][0][l]);
       PoseError error{position[b][l], rotation[b][l]};
       bool kept = exists_b;
       if ((exists[b][l] & recheck[b][l]) != 0) {  // rare: no branch on exists_b alone
@@ -176,6 +192,7 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
   // read afterwards, and their zero initialisation (some 11 kB) is then paid once per call
   BlockAnswer answer;
   CandidatesT<Lanes> found;
+  KnownTurnsT<Lanes> known;
   for (std::size_t first = 0; first < n; first += kLanes) {
     PoseBlock poses;
     poses.count = static_cast<int>(std::min<std::size_t>(kLanes, n - first));
@@ -184,7 +201,7 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
       poses.seed[l] = seeds + (first + l) * seed_stride;
     }
     if (!plan.refine) {
-      direct_block(plan, frames, poses, tolerance, answer, found);
+      direct_block(plan, frames, poses, tolerance, answer, found, known);
       batch::put_nearest(plan, answer, tolerance, out, first, poses.count, report);
     }
     for (int l = 0; l < poses.count; ++l) {

@@ -97,10 +97,13 @@ DHKIN_INLINE Mask surely_apart(const Lanes& a, const Lanes& b, bool revolute, do
 // branches of a spherical wrist share q1-q3, the four branches of one shoulder q1): a joint value
 // with the bits of an earlier branch's, in every lane, takes that branch's sine and cosine, and a
 // branch whose first k joint values are an earlier branch's starts from that branch's frame after
-// k joints; the frames advance joint by joint for all branches together. The same operations on
-// the same values as check() per branch, so the same bits.
+// k joints; the frames advance joint by joint for all branches together. A joint variable with
+// the bits of an angle whose sine and cosine the closed form computed (`known`, may be null), in
+// every lane, takes those. The same operations on the same values as check() per branch, so the
+// same bits.
 inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, kBranches>& q,
                            const std::array<bool, kBranches>& wanted, const FrameT<Lanes>& target,
+                           const KnownTurnsT<Lanes>* known,
                            std::array<PoseErrorT<Lanes>, kBranches>& errors) {
   using block::same_bits;
   const ChainShape shape(chain);
@@ -126,7 +129,15 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
         if (wanted[a] && same_bits(q[a][j], q[b][j])) from = a;
       }
       if (from < 0) {
-        joint_motion(chain, j, q[b][j], motions[b]);
+        const ChainJoint& joint = chain.joints[j];
+        const Lanes variable = joint.motion(q[b][j]);
+        if (known != nullptr && joint.revolute && known->known[b][j] &&
+            same_bits(variable, known->angle[b][j])) {  // joint_motion's outputs, as computed
+          motions[b].variable[j] = variable;
+          motions[b].turn[j] = known->turn[b][j];
+        } else {
+          joint_motion(chain, j, q[b][j], motions[b]);
+        }
       } else {  // joint_motion's outputs: the variable, and the turn of a revolute joint
         motions[b].variable[j] = motions[from].variable[j];
         if (chain.joints[j].revolute) motions[b].turn[j] = motions[from].turn[j];
@@ -160,10 +171,12 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
 }
 
 // Steps 1-3 of the direct path for a block of poses of an exact-family table (plan.refine
-// false; the caller checks). `found`: room for the closed form's candidates (the caller keeps it
-// from block to block; every value read is written first).
+// false; the caller checks). `found` and `known`: room for the closed form's candidates and
+// sines and cosines (the caller keeps them from block to block; every value read is written
+// first, and a stale known pair is still a true one).
 inline void direct_block(const Plan& plan, const TargetFrames& frames, const PoseBlock& poses,
-                         double tolerance, BlockAnswer& out, CandidatesT<Lanes>& found) {
+                         double tolerance, BlockAnswer& out, CandidatesT<Lanes>& found,
+                         KnownTurnsT<Lanes>& known) {
   tolerance = plan.verification_tolerance(tolerance);
   // the poses' 16 entries and the seeds by lane, then pose_and_seed_status in lanes
   alignas(64) double entries[16][kLanes];
@@ -193,6 +206,7 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   for (int l = 0; l < kLanes; ++l) out.projection[l] = lane(declined, l) ? 0.0 : lane(moved, l);
   FrameT<Lanes> T_dh;
   targets_of(frames, projected, T_dh, out.T_at);
+  found.known = &known;  // the sines and cosines check_branches may take
   plan.solve_family(T_dh, out.seed, 0, plan.clamp(tolerance), found);
   out.why = found.why;
   for (int b = 0; b < kBranches; ++b) declined = declined || (found.near[b] & kFree) != 0;
@@ -206,7 +220,7 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
     // lanes without a candidate are checked on zeros (finite values; their errors are not used)
     for (int j = 0; j < kDof && wanted[b]; ++j) q[j] = select(abs(q[j]) < INFINITY, q[j], Lanes(0.0));
   }
-  check_branches(plan.chain, out.q, wanted, out.T_at, out.errors);
+  check_branches(plan.chain, out.q, wanted, out.T_at, &known, out.errors);
   for (int b = 0; b < kBranches; ++b) {
     declined = declined || (out.ok[b] && !out.errors[b].within(tolerance));
   }

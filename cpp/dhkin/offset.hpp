@@ -148,6 +148,7 @@ inline double kept_in_reach(const OffsetGeometry& g, const Frame& T_home, const 
 template <class V>
 struct ElbowRoot {
   V q2{}, q3{}, q4{};
+  SinCosT<V> t3{};  // sincos(q3)
   MaskOf<V> valid{};
   BitsOf<V> flag{}, near{};
 };
@@ -232,6 +233,7 @@ DHKIN_INLINE ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& se
   out.flag = setup.flag;
   out.q3 = setup.q3[e];
   const SinCosT<V> t3 = sincos(out.q3);
+  out.t3 = t3;
   const Vec3T<V> bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
   out.near = bits_if(norm_at_most(bent, request.seed_length), kElbow);
   const auto seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
@@ -437,6 +439,12 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
     out.valid[b] = q1_valid[s] && wrist_valid && r.valid;
     out.flags[b] = shoulder_flag | wrist_flag[s] | r.flag;
     out.near[b] = shoulder_near | wrist_near[s] | r.near;
+    if (out.known != nullptr) {  // sincos(-x) negated: the bits of sincos(x)
+      out.known->put(b, 0, 1.0, q1[s], t1[s]);
+      out.known->put(b, 2, 1.0, r.q3, r.t3);
+      out.known->put(b, 4, 1.0, q5[k], negated(minus_q5[k]));
+      out.known->put(b, 5, 1.0, q6[k], negated(turns[k].q6));
+    }
   }
   for (int k = 0; k < 4; ++k) {
     const int s = k / 2, w = k % 2;

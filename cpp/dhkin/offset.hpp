@@ -158,6 +158,7 @@ struct ElbowRoot {
 template <class V>
 struct ElbowSetup {
   V q3[2] = {};
+  SinCosT<V> t3[2] = {};  // sincos(q3[e])
   MaskOf<V> reach_ok{}, merged{}, clamped{};
   BitsOf<V> flag{};
   V total{};  // angle about n of G plane_x from plane_x
@@ -174,7 +175,7 @@ DHKIN_INLINE void elbow_setups(const OffsetGeometry& g, const FrameT<V>& T_home,
   const double L2 = g.upper_length, L3 = g.forearm_length;
   const double low = std::abs(L2 - L3), high = L2 + L3;
   V root[N], kappa[N], first[N], second[N];
-  SinCosT<V> f[N];
+  SinCosT<V> f[N], f2[N];
   for (int a = 0; a < N; ++a) {
     out[a].total = plane_angle(g, motion_apply(g, T_home, turns[a], g.plane_x, false));
   }
@@ -197,11 +198,14 @@ DHKIN_INLINE void elbow_setups(const OffsetGeometry& g, const FrameT<V>& T_home,
     first[a] = g.elbow_base + half, second[a] = g.elbow_base - half;
   }
   for (int a = 0; a < N; ++a) f[a] = sincos(first[a]);
+  for (int a = 0; a < N; ++a) f2[a] = sincos(second[a]);  // both roots' for the elbows
   for (int a = 0; a < N; ++a) {
     const V turn = f[a].c * g.elbow_turn + g.sign3 * f[a].s * g.elbow_alpha;
     const auto swap = select(turn >= 0.0, V(1.0), V(-1.0)) != V(reach_side[a]);
     out[a].q3[0] = select(swap, second[a], first[a]);
     out[a].q3[1] = select(swap, first[a], second[a]);
+    out[a].t3[0] = {select(swap, f2[a].s, f[a].s), select(swap, f2[a].c, f[a].c)};
+    out[a].t3[1] = {select(swap, f[a].s, f2[a].s), select(swap, f[a].c, f2[a].c)};
   }
 }
 
@@ -232,7 +236,7 @@ DHKIN_INLINE ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& se
   ElbowRoot<V> out;
   out.flag = setup.flag;
   out.q3 = setup.q3[e];
-  const SinCosT<V> t3 = sincos(out.q3);
+  const SinCosT<V> t3 = setup.t3[e];  // sincos(out.q3)
   out.t3 = t3;
   const Vec3T<V> bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
   out.near = bits_if(norm_at_most(bent, request.seed_length), kElbow);

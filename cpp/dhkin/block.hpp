@@ -109,25 +109,35 @@ inline void check_branches(const Chain& chain, const std::array<JointsT<Lanes>, 
   const ChainShape shape(chain);
   const int n = chain.dof();
   std::array<JointMotions<Lanes>, kBranches> motions;
-  // per branch: the earliest wanted branch with the longest run of equal leading joint values
-  // (source, -1 for none) and that run's length (shared). A source shares fewer joints with its
-  // own source than with the branch: a branch sharing no more than that would have taken the
-  // earlier one.
+  // Branches share joint values within a shoulder group, an elbow pair and a wrist pair (branch
+  // index 4 shoulder + 2 elbow + wrist): the values of branch b are looked for among the wanted
+  // earlier branches whose index differs from b's in one bit (any branch with the same bits
+  // gives the same values; one not looked at is computed again).
+  const auto neighbours = [&](int b, auto&& fn) {
+    for (int m = 1; m < kBranches; m <<= 1) {
+      const int a = b ^ m;
+      if (a < b && wanted[a] && fn(a)) return;
+    }
+  };
+  // per branch: the neighbour with the longest run of equal leading joint values (source, -1 for
+  // none) and that run's length (shared), among those whose own frame starts within the run
+  // (it then exists when the branch starts from it).
   int source[kBranches], shared[kBranches];
   for (int b = 0; b < kBranches; ++b) {
     source[b] = -1, shared[b] = 0;
     if (!wanted[b]) continue;
-    for (int a = 0; a < b; ++a) {
-      if (!wanted[a]) continue;
+    neighbours(b, [&](int a) {
       int k = 0;
       while (k < n && same_bits(q[a][k], q[b][k])) ++k;
-      if (k > shared[b]) shared[b] = k, source[b] = a;
-    }
+      if (k > shared[b] && shared[a] <= k) shared[b] = k, source[b] = a;
+      return false;
+    });
     for (int j = 0; j < n; ++j) {
       int from = -1;
-      for (int a = 0; a < b && from < 0; ++a) {
-        if (wanted[a] && same_bits(q[a][j], q[b][j])) from = a;
-      }
+      neighbours(b, [&](int a) {
+        if (same_bits(q[a][j], q[b][j])) from = a;
+        return from >= 0;
+      });
       if (from < 0) {
         const ChainJoint& joint = chain.joints[j];
         const Lanes variable = joint.motion(q[b][j]);
@@ -213,12 +223,15 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   std::array<bool, kBranches> wanted{};
   for (int b = 0; b < kBranches; ++b) {
     out.ok[b] = found.valid[b] && !declined;
-    JointsT<Lanes>& q = out.q[b];
-    q = found.q[b];
-    plan.wrap_revolute(q);
     wanted[b] = any(out.ok[b]);
-    // lanes without a candidate are checked on zeros (finite values; their errors are not used)
-    for (int j = 0; j < kDof && wanted[b]; ++j) q[j] = select(abs(q[j]) < INFINITY, q[j], Lanes(0.0));
+    // revolute values wrapped; lanes without a candidate are checked on zeros (finite values;
+    // their errors are not used)
+    for (int j = 0; j < kDof; ++j) {
+      Lanes value = found.q[b][j];
+      if (plan.revolute(j)) value = wrap(value);
+      if (wanted[b]) value = select(abs(value) < INFINITY, value, Lanes(0.0));
+      out.q[b][j] = value;
+    }
   }
   check_branches(plan.chain, out.q, wanted, out.T_at, &known, out.errors);
   for (int b = 0; b < kBranches; ++b) {

@@ -134,10 +134,14 @@ inline void place_nearer_the_seed(const Plan& plan, const Frame& T, const Extras
 // then cover the turn once).
 constexpr int kValleyGrid = 16;
 // Steps of successive parabolic interpolation that take a local minimum of the scan to the root
-// beside it: the squared residual is quadratic near a root, so each step gains about as many
-// digits as it has (from a grid step of ~0.4 rad, four reach ~1e-6 rad and the descent below
-// then converges at once).
-constexpr int kValleySteps = 4;
+// beside it (the interpolation stops at a step that does not lower the residual): the squared
+// residual is quadratic near a simple root, so each step gains about as many digits as it has
+// (from a grid step of ~0.4 rad, four reach ~1e-6 rad and the descent below then converges at
+// once). Near a double root (the calibrated UR5e's special poses, e.g. q = (-90, 90, -90, -90,
+// 0, 0) deg: two roots 2.3e-4 rad apart on q6, sigma_min 7e-9) it is quartic and a step gains a
+// constant factor: four stopped 4e-3 rad off, where the released descent did not converge, so
+// neither root came back unseeded; twelve reach 4e-5.
+constexpr int kValleySteps = 12;
 
 namespace valley {
 

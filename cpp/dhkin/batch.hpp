@@ -21,8 +21,8 @@
 namespace dhkin {
 
 // The caller's arrays for N poses: q (N, kBranches, kDof), valid, branch, flags (N, kBranches),
-// errors (N, kBranches, 2), projection and dropped (N). Slots a pose does not fill are left as
-// they are (the caller gives them zeros, and branch -1).
+// errors (N, kBranches, 2), projection and dropped (N). The caller gives every slot its empty
+// values (zeros, and branch -1); a pose leaves the slots it does not fill with those values.
 struct NearestOutputs {
   double* q;
   bool* valid;
@@ -42,6 +42,22 @@ struct BatchReport {
 };
 
 namespace batch {
+
+// to[j] = from[j * kLanes] for the kDof joints: one joint vector out of a by-joint, by-lane array.
+// The output arrays are fresh memory, where stores cost most: with AVX-512 the joint vector is
+// gathered and written by one masked store.
+DHKIN_INLINE void put_joints(double* to, const double* from) {
+#if defined(__AVX512F__)
+  static_assert(kDof <= 8, "one vector");
+  const __m512i index = _mm512_set_epi64(0, 0, 5 * kLanes, 4 * kLanes, 3 * kLanes, 2 * kLanes,
+                                         kLanes, 0);
+  const __mmask8 joints = static_cast<__mmask8>((1u << kDof) - 1);
+  const __m512d values = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), joints, index, from, 8);
+  _mm512_mask_storeu_pd(to, joints, values);
+#else
+  for (int j = 0; j < kDof; ++j) to[j] = from[j * kLanes];
+#endif
+}
 
 // Slot `slot` of pose i gets `solution`.
 inline void put(const NearestOutputs& out, std::size_t i, int slot, const Solution& solution) {
@@ -70,7 +86,14 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
   for (int b = 0; b < kBranches; ++b) {
     Mask found = answer.ok[b];
     std::memcpy(exists[b], &found.v, sizeof exists[b]);
-    if (!any(found)) continue;
+    if (!any(found)) {  // defined values for the loop below (which writes, then drops them)
+      std::memset(q[b], 0, sizeof q[b]);
+      std::memset(recheck[b], 0, sizeof recheck[b]);
+      std::memset(flags[b], 0, sizeof flags[b]);
+      std::memset(position[b], 0, sizeof position[b]);
+      std::memset(rotation[b], 0, sizeof rotation[b]);
+      continue;
+    }
     Mask clipped = every_lane<Lanes>(false);
     for (int j = 0; j < kDof; ++j) {
       const bool revolute = plan.revolute(j);
@@ -89,22 +112,44 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
     answer.errors[b].position.store(position[b]);
     answer.errors[b].rotation.store(rotation[b]);
   }
+  // pose by pose: each solution written straight into its slot; a branch without a copy is
+  // written too and then overwritten by the next one (its slot does not advance), so the loop
+  // does not branch on which copies exist (they vary from pose to pose). The slot past the last
+  // solution is given back its empty values (the caller's zeros, branch -1) where it was
+  // written over.
   for (int l = 0; l < count; ++l) {
     if (!answer.answered[l]) continue;
     const std::size_t i = first + static_cast<std::size_t>(l);
+    const std::size_t row = i * kBranches;
+    double* const q_out = out.q + row * kDof;
+    double* const errors_out = out.errors + 2 * row;
     int slot = 0;
+    bool spoiled = false;  // slot `slot` holds a branch without a copy
     for (int b = 0; b < kBranches; ++b) {
-      if (exists[b][l] == 0) continue;
-      Solution solution;
-      for (int j = 0; j < kDof; ++j) solution.q[j] = q[b][j][l];
-      solution.branch = b;
-      solution.flags = static_cast<std::uint8_t>(flags[b][l]);
-      solution.error = {position[b][l], rotation[b][l]};
-      if (recheck[b][l] != 0) {
-        solution.error = check(plan.chain, solution.q.data(), lane(answer.T_at, l));
-        if (!solution.error.within(tolerance)) continue;
+      const bool exists_b = exists[b][l] != 0;
+      double* const q_slot = q_out + slot * kDof;
+      put_joints(q_slot, &q[b][0][l]);
+      PoseError error{position[b][l], rotation[b][l]};
+      bool kept = exists_b;
+      if ((exists[b][l] & recheck[b][l]) != 0) {  // rare: no branch on exists_b alone
+        error = check(plan.chain, q_slot, lane(answer.T_at, l));
+        kept = error.within(tolerance);
       }
-      put(out, i, slot++, solution);
+      out.valid[row + slot] = true;
+      out.branch[row + slot] = static_cast<std::int16_t>(b);
+      out.flags[row + slot] = static_cast<std::uint8_t>(flags[b][l]);
+      errors_out[2 * slot] = error.position;
+      errors_out[2 * slot + 1] = error.rotation;
+      spoiled = !kept;
+      slot += kept ? 1 : 0;
+    }
+    if (spoiled && slot < kBranches) {
+      for (int j = 0; j < kDof; ++j) q_out[slot * kDof + j] = 0.0;
+      out.valid[row + slot] = false;
+      out.branch[row + slot] = -1;
+      out.flags[row + slot] = 0;
+      errors_out[2 * slot] = 0.0;
+      errors_out[2 * slot + 1] = 0.0;
     }
     out.projection[i] = answer.projection[l];
     out.dropped[i] = 0;
@@ -143,6 +188,11 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
     for (int j = 0; j < kDof; ++j) seed[j] = seeds[i * seed_stride + j];
     return seed;
   };
+  // one answer and one set of candidates for every block: each block writes every value that is
+  // read afterwards, and their zero initialisation (some 11 kB) is then paid once per call
+  BlockAnswer answer;
+  CandidatesT<Lanes> found;
+  KnownTurnsT<Lanes> known;
   for (std::size_t first = 0; first < n; first += kLanes) {
     PoseBlock poses;
     poses.count = static_cast<int>(std::min<std::size_t>(kLanes, n - first));
@@ -150,9 +200,8 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
       poses.T[l] = T + 16 * (first + l);
       poses.seed[l] = seeds + (first + l) * seed_stride;
     }
-    BlockAnswer answer;
     if (!plan.refine) {
-      direct_block(plan, frames, poses, tolerance, answer);
+      direct_block(plan, frames, poses, tolerance, answer, found, known);
       batch::put_nearest(plan, answer, tolerance, out, first, poses.count, report);
     }
     for (int l = 0; l < poses.count; ++l) {

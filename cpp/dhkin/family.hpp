@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "dhkin/angles.hpp"
 #include "dhkin/chain.hpp"
 #include "dhkin/simd.hpp"
 
@@ -23,6 +24,30 @@ constexpr int kWhySize = 6;
 template <class V>
 using JointsT = std::array<V, kDof>;
 
+// Sines and cosines a closed form computed of its candidates' joint values, for the check of the
+// candidates (block.hpp) to take instead of computing them again: wherever known[b][j],
+// turn[b][j] = sincos(angle[b][j]) bit for bit in every lane. The check takes a pair only where
+// its own joint variable has the bits of `angle` in every lane (a value the closed form patched
+// lane by lane afterwards, or wrapped, is computed again), so a stale pair is never wrong.
+template <class V>
+struct KnownTurnsT {
+  std::array<std::array<V, kDof>, kBranches> angle;
+  std::array<std::array<SinCosT<V>, kDof>, kBranches> turn;
+  std::array<std::array<bool, kDof>, kBranches> known{};
+
+  // sincos(sign * x) from t = sincos(x), for sign +-1 (negated: the bits of sincos(-x)).
+  static SinCosT<V> signed_turn(double sign, const SinCosT<V>& t) {
+    return sign > 0.0 ? t : negated(t);
+  }
+  // Branch b's joint j has value `value` = sign * x and t = sincos(x) (sign +-1).
+  void put(int b, int j, double sign, V x, const SinCosT<V>& t) {
+    if (sign != 1.0 && sign != -1.0) return;
+    angle[b][j] = sign * x;
+    turn[b][j] = signed_turn(sign, t);
+    known[b][j] = true;
+  }
+};
+
 // The candidates of one target (V = double) or of kLanes targets (V = Lanes, one per lane).
 template <class V>
 struct CandidatesT {
@@ -31,6 +56,8 @@ struct CandidatesT {
   std::array<BitsOf<V>, kBranches> flags{};
   std::array<BitsOf<V>, kBranches> near{};
   std::array<V, kWhySize> why{};
+  // Where the closed form records the sines and cosines it computed (none when null).
+  KnownTurnsT<V>* known = nullptr;
 
   // Candidates with any non-finite joint value are not valid.
   void drop_non_finite() {

@@ -148,6 +148,7 @@ inline double kept_in_reach(const OffsetGeometry& g, const Frame& T_home, const 
 template <class V>
 struct ElbowRoot {
   V q2{}, q3{}, q4{};
+  SinCosT<V> t3{};  // sincos(q3)
   MaskOf<V> valid{};
   BitsOf<V> flag{}, near{};
 };
@@ -157,6 +158,7 @@ struct ElbowRoot {
 template <class V>
 struct ElbowSetup {
   V q3[2] = {};
+  SinCosT<V> t3[2] = {};  // sincos(q3[e])
   MaskOf<V> reach_ok{}, merged{}, clamped{};
   BitsOf<V> flag{};
   V total{};  // angle about n of G plane_x from plane_x
@@ -173,7 +175,7 @@ DHKIN_INLINE void elbow_setups(const OffsetGeometry& g, const FrameT<V>& T_home,
   const double L2 = g.upper_length, L3 = g.forearm_length;
   const double low = std::abs(L2 - L3), high = L2 + L3;
   V root[N], kappa[N], first[N], second[N];
-  SinCosT<V> f[N];
+  SinCosT<V> f[N], f2[N];
   for (int a = 0; a < N; ++a) {
     out[a].total = plane_angle(g, motion_apply(g, T_home, turns[a], g.plane_x, false));
   }
@@ -196,11 +198,14 @@ DHKIN_INLINE void elbow_setups(const OffsetGeometry& g, const FrameT<V>& T_home,
     first[a] = g.elbow_base + half, second[a] = g.elbow_base - half;
   }
   for (int a = 0; a < N; ++a) f[a] = sincos(first[a]);
+  for (int a = 0; a < N; ++a) f2[a] = sincos(second[a]);  // both roots' for the elbows
   for (int a = 0; a < N; ++a) {
     const V turn = f[a].c * g.elbow_turn + g.sign3 * f[a].s * g.elbow_alpha;
     const auto swap = select(turn >= 0.0, V(1.0), V(-1.0)) != V(reach_side[a]);
     out[a].q3[0] = select(swap, second[a], first[a]);
     out[a].q3[1] = select(swap, first[a], second[a]);
+    out[a].t3[0] = {select(swap, f2[a].s, f[a].s), select(swap, f2[a].c, f[a].c)};
+    out[a].t3[1] = {select(swap, f[a].s, f2[a].s), select(swap, f[a].c, f2[a].c)};
   }
 }
 
@@ -231,7 +236,8 @@ DHKIN_INLINE ElbowRoot<V> elbow(const OffsetGeometry& g, const ElbowSetup<V>& se
   ElbowRoot<V> out;
   out.flag = setup.flag;
   out.q3 = setup.q3[e];
-  const SinCosT<V> t3 = sincos(out.q3);
+  const SinCosT<V> t3 = setup.t3[e];  // sincos(out.q3)
+  out.t3 = t3;
   const Vec3T<V> bent = g.upper_arm + t3.c * g.forearm + t3.s * g.axis3_x_forearm;
   out.near = bits_if(norm_at_most(bent, request.seed_length), kElbow);
   const auto seeded = out.near != 0 && (request.use_seed & kElbow) != 0;
@@ -437,6 +443,12 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
     out.valid[b] = q1_valid[s] && wrist_valid && r.valid;
     out.flags[b] = shoulder_flag | wrist_flag[s] | r.flag;
     out.near[b] = shoulder_near | wrist_near[s] | r.near;
+    if (out.known != nullptr) {  // sincos(-x) negated: the bits of sincos(x)
+      out.known->put(b, 0, 1.0, q1[s], t1[s]);
+      out.known->put(b, 2, 1.0, r.q3, r.t3);
+      out.known->put(b, 4, 1.0, q5[k], negated(minus_q5[k]));
+      out.known->put(b, 5, 1.0, q6[k], negated(turns[k].q6));
+    }
   }
   for (int k = 0; k < 4; ++k) {
     const int s = k / 2, w = k % 2;

@@ -100,6 +100,7 @@ DHKIN_INLINE ShoulderRoots<V> shoulder(const SphericalGeometry& g, const FrameT<
 template <class V>
 struct TargetColumns {
   Vec3T<V> first, last;
+  SinCosT<V> t1;  // sincos(turn1)
 };
 
 template <class V>
@@ -107,7 +108,7 @@ DHKIN_INLINE TargetColumns<V> target_columns(const SphericalGeometry& g, const F
   const SinCosT<V> t = sincos(turn1);
   const Vec3T<V> k0 = T.rotate(g.target_to_wrist.column(0));
   const Vec3T<V> k2 = T.rotate(g.target_to_wrist.column(2));
-  return {rotate_about(g.up, t.c, -t.s, k0), rotate_about(g.up, t.c, -t.s, k2)};
+  return {rotate_about(g.up, t.c, -t.s, k0), rotate_about(g.up, t.c, -t.s, k2), t};
 }
 
 // Columns 0 and 2 of H = F^T R23^T K1 (below) for an arm turned by turn23 (t23: its sine and
@@ -129,6 +130,8 @@ DHKIN_INLINE WristColumns<V> wrist_columns(const SphericalGeometry& g,
 template <class V>
 struct WristRoots {
   V q[2][3] = {};
+  V t4[2] = {}, t5[2] = {};  // of each wrist branch: q4 = d4 t4, q5 = d5 (t5 - tilt)
+  SinCosT<V> s4[2] = {}, s5[2] = {};  // their sines and cosines
   BitsOf<V> flag{}, near{};
 };
 
@@ -202,6 +205,8 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
       // Ry(-t5) Rz(-t4) H = Rz(t6): t6 from its first column
       const V t6 =
           atan2(-c4.s * h00 + c4.c * h10, s5.c * (c4.c * h00 + c4.s * h10) - s5.s * h20);
+      roots[a].t4[w] = t4[a][w], roots[a].s4[w] = c4;
+      roots[a].t5[w] = t5[a][w], roots[a].s5[w] = s5;
       roots[a].q[w][0] = d4 * t4[a][w];
       roots[a].q[w][1] = d5 * (t5[a][w] - g.tilt);
       roots[a].q[w][2] = d6 * t6;
@@ -335,6 +340,13 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
     store(out, b, g.signs[0] * turn1[s], g.signs[1] * turn2[k], g.signs[2] * turn3[k], w[k], wb,
           arm_valid, arm.flag | elbow_flag[s] | w[k].flag,
           arm.near | elbow_near[s] | w[k].near | clamped[s]);
+    if (out.known != nullptr) {
+      out.known->put(b, 0, g.signs[0], turn1[s], columns[s].t1);
+      out.known->put(b, 2, g.signs[2], turn3[k], t3[k]);
+      out.known->put(b, 3, g.wrist_directions[0], w[k].t4[wb], w[k].s4[wb]);
+      // q5 = d5 (t5 - tilt) has the bits of d5 t5 only without a tilt (t5 - 0.0 is t5)
+      if (g.tilt == 0.0) out.known->put(b, 4, g.wrist_directions[1], w[k].t5[wb], w[k].s5[wb]);
+    }
   }
 }
 

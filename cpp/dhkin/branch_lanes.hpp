@@ -173,7 +173,8 @@ inline bool spherical_wrist_lanes(const SphericalGeometry& g, const Frame& T,
   const Lanes h00 = h0.x, h10 = h0.y, h20 = h0.z, h02 = h2.x, h12 = h2.y, h22 = h2.z;
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
   const Lanes sine = sqrt(h02 * h02 + h12 * h12);
-  if (any(sine <= request.seed_angle)) return false;  // wrist near
+  const Lanes turn_uncertainty = elbow_uncertainty(g, distance, sine_scaled, request.clamp);
+  if (any(sine <= request.seed_angle + turn_uncertainty)) return false;  // wrist near
   const LaneBits wrist_flag = bits_if(sine <= kFlagBand, kWrist);
   const Lanes theta = atan2(sine, h22);
   const Lanes alpha = atan2(h12, h02);

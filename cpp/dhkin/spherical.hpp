@@ -143,10 +143,15 @@ struct WristRoots {
 // r = c - (c of the seed), wrapped, evenly between the two joints: t4 = seed's t4 + r / 2 (in both
 // branches), theta = +- the computed angle, and t6 from the remainder Ry(-theta) Rz(-t4) H, so
 // that the pose error is what the choice costs.
+//
+// `turn_uncertainty` (rad, per arm; null: none): how far turn23 may be off because the arm above
+// is only as good as the pose (elbow_uncertainty); the wrist angle inherits it, so the wrist
+// counts as near singular within that much more than the seed band.
 template <int N, class V>
 DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* const* columns,
                          const V* turn23, const JointsT<V>& seed,
-                         const FamilyRequestT<V>& request, WristRoots<V>* roots) {
+                         const FamilyRequestT<V>& request, WristRoots<V>* roots,
+                         const V* turn_uncertainty = nullptr) {
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
   SinCosT<V> t23[N], s_theta[N], s4[N][2];
   V t4[N][2], t5[N][2];  // of each wrist branch
@@ -159,7 +164,9 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
     const V h02 = h[a].h2.x, h12 = h[a].h2.y;
     sine[a] = sqrt(h02 * h02 + h12 * h12);
     roots[a].flag = bits_if(sine[a] <= kFlagBand, kWrist);
-    roots[a].near = bits_if(sine[a] <= request.seed_angle, kWrist);
+    const V band = turn_uncertainty == nullptr ? V(request.seed_angle)
+                                               : request.seed_angle + turn_uncertainty[a];
+    roots[a].near = bits_if(sine[a] <= band, kWrist);
     seeded[a] = roots[a].near != 0 && (request.use_seed & kWrist) != 0;
   }
   for (int a = 0; a < N; ++a) {
@@ -200,6 +207,29 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
       roots[a].q[w][2] = d6 * t6;
     }
   }
+}
+
+// How far turn23 (= turn2 + turn3) may be off for a wrist centre at `distance` from axis 2
+// known to +-clamp (m), `sine_scaled` = 2 L2 L3 sin(psi) (0 where the elbow merged). With
+// cos(psi) = (distance^2 - L2^2 - L3^2) / (2 L2 L3), the distance moves cos(psi) by at most
+// c = distance clamp / (L2 L3), so psi by min(c / |sin psi|, sqrt(2 c)) (the second where the
+// arm is stretched or folded: 1 - cos(x) = c); turn2 turns the bent arm (length `distance`)
+// onto the target, and a turn of the forearm by x turns it by at most x L3 / distance. Near the
+// stretched or folded elbow this is ~sqrt(clamp / L): a pose a hair from both the elbow and the
+// wrist singularity has its closed-form q5 that far off (FANUC M-10iA: 5e-6 rad for a pose
+// whose q5 is 1e-12). Counted only where the elbow is flagged (|sin psi| <= kFlagBand, or
+// merged): there the two elbow branches are one, so a seeded wrist settles on its own arm. A
+// hair farther off (psi ~1e-4, anthropomorphic arm) the same bound would seed wrists 1e-4 rad
+// off the singularity, whose settling crosses to the other elbow branch or moves the arm along
+// the double singularity's band of near-solutions (duplicate answers).
+template <class V>
+DHKIN_INLINE V elbow_uncertainty(const SphericalGeometry& g, V distance, V sine_scaled,
+                                 double clamp) {
+  const double upper = g.upper_length, fore = g.forearm_length;
+  const V shift = distance * clamp / (upper * fore);  // of cos(psi)
+  const V psi = min(2.0 * upper * fore * shift / max(sine_scaled, V(1e-300)), sqrt(2.0 * shift));
+  const V turn = psi * (distance + fore) / max(distance, V(1e-300));
+  return select(sine_scaled <= kFlagBand * 2 * upper * fore, turn, V(0.0));
 }
 
 // Both wrist branches for one arm turned by turn23 about `lateral` (wrists above).
@@ -249,6 +279,7 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
   TargetColumns<V> columns[2];
   MaskOf<V> reachable[2], merged[2], elbow_seeded[2];
   BitsOf<V> clamped[2], elbow_flag[2], elbow_near[2];
+  V arm_uncertainty[2];
   for (int s = 0; s < 2; ++s) {
     turn1[s] = s == 0 ? arm.front_turn : arm.back_turn;
     target[s] = {arm.height, s == 0 ? arm.front_reach : arm.back_reach};
@@ -269,6 +300,7 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
     elbow_flag[s] = bits_if(merged[s] || sine_scaled[s] <= kFlagBand * 2 * upper * fore, kElbow);
     elbow_near[s] = bits_if(distance <= request.seed_length, kElbow);
     elbow_seeded[s] = elbow_near[s] != 0 && (request.use_seed & kElbow) != 0;
+    arm_uncertainty[s] = elbow_uncertainty(g, distance, sine_scaled[s], request.clamp);
   }
   V turn2[4], turn3[4], turn23[4];
   SinCosT<V> t3[4];
@@ -288,7 +320,9 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
   }
   const TargetColumns<V>* arm_columns[4] = {&columns[0], &columns[0], &columns[1], &columns[1]};
   WristRoots<V> w[4];
-  wrists<4>(g, arm_columns, turn23, seed, request, w);
+  const V turn_uncertainty[4] = {arm_uncertainty[0], arm_uncertainty[0], arm_uncertainty[1],
+                                 arm_uncertainty[1]};
+  wrists<4>(g, arm_columns, turn23, seed, request, w, turn_uncertainty);
   for (int b = 0; b < kBranches; ++b) {
     const int s = b / 4, e = (b / 2) % 2, k = 2 * s + e, wb = b % 2;
     const auto arm_valid =

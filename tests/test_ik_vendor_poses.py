@@ -228,7 +228,7 @@ def elbow_and_wrist_singular_q(robot: dhkin.Robot, n: int,
     stretches or folds the arm (the wrist centre's distance from axis 2 at an extreme: with axis 3
     parallel to axis 2 its square is A + B cos(q3 - phi), solved from three values of q3) and q5
     is 0 (half of them) or +-10^u, u uniform in [-12, -6]."""
-    out = []
+    out: list[np.ndarray] = []
     while len(out) < n:
         q = robot.table.random_q(1, rng)[0]
         trial = np.repeat(q[None], 3, axis=0)

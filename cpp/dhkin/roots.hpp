@@ -134,10 +134,15 @@ inline void place_nearer_the_seed(const Plan& plan, const Frame& T, const Extras
 // then cover the turn once).
 constexpr int kValleyGrid = 16;
 // Steps of successive parabolic interpolation that take a local minimum of the scan to the root
-// beside it: the squared residual is quadratic near a root, so each step gains about as many
-// digits as it has (from a grid step of ~0.4 rad, four reach ~1e-6 rad and the descent below
-// then converges at once).
-constexpr int kValleySteps = 4;
+// beside it, within a bracket that every step narrows (a trial point that is not lower bounds the
+// minimum on its side): the squared residual is quadratic near a simple root, so each step gains
+// about as many digits as it has (from a grid step of ~0.4 rad, four reach ~1e-6 rad and the
+// descent below then converges at once). Near a double root (the calibrated UR5e's special poses,
+// e.g. q = (-90, 90, -90, -90, 0, 0) deg: two roots 2.3e-4 rad apart on q6, sigma_min 7e-9) it
+// is quartic and a step gains a constant factor; four steps, stopping at the first that was not
+// lower, ended 4e-3 to 3e-2 rad off, where the released descent did not converge, so only the
+// seed found those roots. Twelve within the bracket reach 2e-5 to 1e-4.
+constexpr int kValleySteps = 12;
 
 namespace valley {
 
@@ -204,13 +209,13 @@ inline void valley_roots(const Plan& plan, const Frame& T_dh, const Frame& T_at,
       t = std::min(std::max(t, left.t), right.t);
       const Point next = valley::held_member(plan, T_dh, T_at, regular_q, b, t, clamp,
                                              tolerance, found);
-      if (!(next.squared < middle.squared)) break;
-      if (next.t < middle.t) {
-        right = middle;
-      } else {
-        left = middle;
+      if (!(next.t != middle.t) || !std::isfinite(next.squared)) break;
+      if (next.squared < middle.squared) {  // the new middle; the old one bounds its side
+        (next.t < middle.t ? right : left) = middle;
+        middle = next;
+      } else {  // not lower: it still bounds the minimum on its side
+        (next.t < middle.t ? left : right) = next;
       }
-      middle = next;
     }
     Joints root = middle.q;
     if (!std::isfinite(middle.squared) ||

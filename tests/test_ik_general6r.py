@@ -476,3 +476,28 @@ def test_batch_is_the_single_calls_in_the_core() -> None:
     bad[3, 0, 0] = np.nan
     with pytest.raises(InputError, match=r"T\[3\]"):
         robot.ik_batch(bad)
+
+
+#: A regular root of the tilted UR5 at q5 = 0 (sigma_min 0.03; check_general6r's q5 sample 812)
+#: that the damped Newton left 5.7e-13 m off: its polishing stopped at a step still damped after
+#: rejections on the way, which gained less than twofold (docs/general6r.md, "Speed, third pass").
+DAMPED_POLISH_Q = [0.8529931074876274, 5.021299881550304, -0.5638740117981649,
+                   6.119514491888445, 0.0, -5.37695798182409]
+
+
+def test_regular_roots_are_polished_to_the_rounding() -> None:
+    from dhkin.ik.core import FK_ROUNDING
+
+    robot = ur5_tilted()
+    solver = General6RSolver(robot.table)
+    model = robot.reference()
+    T = model.fk(np.array([DAMPED_POLISH_Q]))[0]
+    result = solver.solve_one(T)
+    regular = np.array(["singular" not in flag for flag in result.flags])
+    assert regular.any()
+    F = model.fk(result.q[regular])
+    position, rotation = pose_errors(F, np.repeat(T[None], len(F), axis=0))
+    # the oracle's FK and ours each round by at most FK_ROUNDING per metre of lever
+    assert np.all(position <= 2 * FK_ROUNDING * solver.tip_lever)
+    assert np.all(rotation <= 2 * FK_ROUNDING)
+    assert np.min(np.abs(_wrap(result.q - np.array(DAMPED_POLISH_Q))).max(axis=1)) < SAME

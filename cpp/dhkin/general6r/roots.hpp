@@ -14,6 +14,7 @@
 #include "dhkin/angles.hpp"
 #include "dhkin/chain.hpp"
 #include "dhkin/general6r/candidates.hpp"
+#include "dhkin/general6r/full_steps.hpp"
 #include "dhkin/newton.hpp"
 #include "dhkin/plan.hpp"
 
@@ -43,8 +44,6 @@ constexpr int kTrackSteps = 30;
 // Chain evaluations per step of that path (Newton from the previous step's root: a few steps).
 constexpr int kStepBudget = 40;
 
-using Jacobian = Eigen::Matrix<double, 6, kDof, Eigen::RowMajor>;
-
 // The tolerance Newton is given (it stops at kRefineFraction of it) so that a root's residual is
 // at most kRefineFraction of `tolerance` on the oracle's FK as well: less the FK rounding margin
 // (kFkRounding per metre of `lever`) at that scale.
@@ -71,8 +70,7 @@ inline Jacobian scaled_jacobian(const Chain& chain, const Joints& q, double leve
 // were a tenth of the CRX-10iA's time.)
 inline double smallest_singular(const Chain& chain, const Joints& q, double lever, double band) {
   const Jacobian J = scaled_jacobian(chain, q, lever);
-  const double inverse_size = J.partialPivLu().inverse().norm();
-  const double bound = inverse_size < INFINITY ? 1.0 / inverse_size : 0.0;  // NaN, inf: 0
+  const double bound = singular_bound(J);
   if (bound > band) return bound;
   return Eigen::JacobiSVD<Jacobian>(J).singularValues()(kDof - 1);
 }
@@ -192,7 +190,9 @@ struct Root {
 
 // Refine every start on the exact chain, keep those that verify at `tolerance`, merge those
 // that are one root. Only the elimination's starts are starts: the seed never is (it chooses
-// among the roots, it does not find them). Paired starts get kPairBudget; the roots reached from
+// among the roots, it does not find them). A start of a real eigenvalue takes full Newton steps
+// first (full_steps), refine() where they do not reach the rounding; paired starts go to
+// refine() with kPairBudget. The roots reached from
 // shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
 // probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
 // partner, both 5e-4 from singular near a singular root, was found no other way); those of the
@@ -203,6 +203,7 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
                   const Moves& moves, double tolerance, double lever, double band,
                   std::vector<Root>& roots) {
   const double goal = refine_tolerance(tolerance, lever);
+  const ChainShape shape(chain);
   // on a moved (ill-conditioned) pose every root near a fold gets its partner probed: the roots
   // there cluster near a singular point, and the moved poses' can collide in pairs
   bool moved_pose = false;
@@ -219,18 +220,28 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
   for (const Start& start : starts) {
     Joints q = start.q;
     PoseError error;
+    double sigma_bound = 0.0;  // at q, where full_steps() found it
     if (start.origin >= kMoved) {
       error = back_from_moved(chain, target, q, moves, goal, tolerance);
-    } else {
-      const int budget = (start.origin & kPaired) ? kPairBudget : kBudget;
-      refine(chain, target, q, JointMask{}, goal, {budget, newton::kGrowth, 0.0});
+    } else if (start.origin & kPaired) {
+      refine(chain, target, q, JointMask{}, goal, {kPairBudget, newton::kGrowth, 0.0});
       error = check(chain, q.data(), target);
+    } else {
+      const FullStepRoot quick = full_steps(chain, shape, target, q, goal, lever);
+      if (quick.converged) {
+        error = quick.error;
+        sigma_bound = quick.sigma_bound;
+      } else {
+        refine(chain, target, q, JointMask{}, goal, {kBudget, newton::kGrowth, 0.0});
+        error = check(chain, q.data(), target);
+      }
     }
     if (!error.within(tolerance)) {
       ++failed;
       continue;
     }
     error = polish(chain, target, q, goal, error);
+    finish(chain, shape, target, q, goal, lever, error, sigma_bound);
     q = wrapped(q);
     const bool wants_probe = (start.origin & kShared) != 0 || moved_pose;
     const int duplicate = known(q);
@@ -238,7 +249,11 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
       probe[duplicate] = probe[duplicate] || wants_probe;
       continue;
     }
-    roots.push_back({q, error, smallest_singular(chain, q, lever, band)});
+    // the bound at the unwrapped values, where full_steps() had the Jacobian (the wrapped ones
+    // differ by rounding): above the band it is the flag's answer, as smallest_singular's
+    const double sigma =
+        sigma_bound > band ? sigma_bound : smallest_singular(chain, q, lever, band);
+    roots.push_back({q, error, sigma});
     probe.push_back(wants_probe);
   }
   // near a fold, the partner of each root with a small singular value (its eliminated joint may
@@ -253,9 +268,13 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     PoseError error = check(chain, partner.data(), target);
     if (!error.within(tolerance)) continue;
     error = polish(chain, target, partner, goal, error);
+    double sigma_bound = 0.0;
+    finish(chain, shape, target, partner, goal, lever, error, sigma_bound);
     partner = wrapped(partner);
     if (known(partner) >= 0) continue;
-    roots.push_back({partner, error, smallest_singular(chain, partner, lever, band)});
+    const double sigma =
+        sigma_bound > band ? sigma_bound : smallest_singular(chain, partner, lever, band);
+    roots.push_back({partner, error, sigma});
   }
   return failed;
 }

@@ -1,0 +1,138 @@
+// Newton by full Gauss-Newton steps from an elimination start near a simple root
+// (docs/general6r.md, "Speed, third pass"): the cheap way to the root for the starts that need
+// no damping; the others go to refine() (newton.hpp) from the start itself, as before.
+//
+// An elimination start lies within ~1e-8 of its root (its eigenvalue and null vector; a
+// cluster's split ~1e-5), where Newton converges quadratically: one or two full steps reach the
+// arithmetic's rounding. refine() takes the same steps by a damped 12 x 6 least squares and
+// polishes until a step gains less than twofold, which costs one evaluation more per root (the
+// step that tries to gain below the rounding), and settle() then evaluated the chain twice more
+// at the root (check() for the residual, smallest_singular() for the Jacobian). Here the frames
+// of the last evaluation give both: the residual (the end frame is fk()'s own value, so
+// pose_error of it is check()'s) and the Jacobian at the root.
+//
+// Joint values are URDF joint values (rad); `chain` is the exact chain to the point verified,
+// targets that point's pose in DH frame 0 (metres).
+#pragma once
+
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "dhkin/chain.hpp"
+#include "dhkin/newton.hpp"
+
+namespace dhkin::general6r {
+
+// Full steps allowed: from ~1e-5 (a cluster's split) quadratic convergence reaches the rounding
+// in three; a start that needs more is not near a simple root, and refine() takes it over.
+constexpr int kFullSteps = 4;
+// The chain's FK rounds the end frame by a few ulps (per metre of the lever, per rad): an error
+// within this many is at the rounding, where no step can shrink it twofold for certain (the step
+// that tries costs an evaluation per root), so the steps stop there.
+constexpr double kRoundingUlps = 4.0;
+
+using Jacobian = Eigen::Matrix<double, 6, kDof, Eigen::RowMajor>;
+
+// The chain at one set of joint values: the frames each joint moves about and the end frame
+// (chain_frames: fk()'s and fk_frames' values), the error twist against the target and its size.
+struct Evaluation {
+  std::array<Frame, kDof + 1> frames;
+  Eigen::Matrix<double, 6, 1> e;
+  PoseError error;
+  double size = 0.0;  // position^2 + rotation^2
+};
+
+inline void evaluate(const Chain& chain, const ChainShape& shape, const Joints& q,
+                     const Frame& target, Evaluation& out) {
+  JointMotions<double> motions;
+  joint_motions(chain, q.data(), motions);
+  chain_frames(chain, shape, motions, out.frames.data());
+  out.error = error_twist(out.frames[kDof], target, out.e.data());
+  out.size = out.error.position * out.error.position + out.error.rotation * out.error.rotation;
+}
+
+// 1 / |J^-1|_F of J, a lower bound of its smallest singular value (within sqrt(6) of it; 0 where
+// J is singular or not finite).
+inline double singular_bound(const Jacobian& J) {
+  const double inverse_size = J.partialPivLu().inverse().norm();
+  return inverse_size < INFINITY ? 1.0 / inverse_size : 0.0;
+}
+
+// What full_steps() reached.
+struct FullStepRoot {
+  bool converged = false;
+  PoseError error;           // check()'s error at the root
+  double sigma_bound = 0.0;  // singular_bound of the scaled Jacobian at the root
+};
+
+// Full Gauss-Newton steps from q towards `target`, each solved by LU of the 6 x 6 Jacobian, while
+// each is within newton::kMaxJointStep per joint and shrinks the squared error
+// newton::kPolishGain-fold (refine()'s polishing rule), at most kFullSteps, until the error is at
+// the rounding and within newton::kRefineFraction of `goal` (at_rounding: refine()'s
+// convergence). Where they get there, q (in place) is the root, with its error and singular bound
+// (linear rows of the Jacobian over `lever`). Where not (a start farther off, a singular root's
+// linear convergence, a nearly singular Jacobian's error that stops shrinking above the
+// rounding), q is left as it was: refine() takes it from the start, as it did before.
+//
+// Whether an error is at the rounding (kRoundingUlps, per metre of `lever`) and within
+// newton::kRefineFraction of `goal`: where full_steps() stops.
+inline bool at_rounding(const PoseError& e, double goal, double lever) {
+  const double ulp = std::numeric_limits<double>::epsilon() * kRoundingUlps;
+  const double converged = newton::kRefineFraction * goal;
+  return e.position <= ulp * lever && e.rotation <= ulp && e.position <= converged &&
+         e.rotation <= converged;
+}
+
+inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, const Frame& target,
+                               Joints& q, double goal, double lever) {
+  const auto at_rounding = [&](const PoseError& e) {
+    return general6r::at_rounding(e, goal, lever);
+  };
+  FullStepRoot out;
+  Evaluation now, trial;
+  Joints current = q;
+  evaluate(chain, shape, current, target, now);
+  Jacobian J;
+  for (int step = 0; step < kFullSteps && !at_rounding(now.error); ++step) {
+    jacobian(chain, now.frames.data(), J.data());
+    const Eigen::Matrix<double, kDof, 1> dq = J.partialPivLu().solve(now.e);
+    Joints next;
+    for (int j = 0; j < kDof; ++j) {
+      if (!(std::abs(dq(j)) <= newton::kMaxJointStep)) return out;  // also NaN
+      next[j] = current[j] + dq(j);
+    }
+    evaluate(chain, shape, next, target, trial);
+    if (!(trial.size * newton::kPolishGain <= now.size)) return out;
+    current = next;
+    std::swap(now, trial);
+  }
+  if (!at_rounding(now.error)) return out;
+  jacobian(chain, now.frames.data(), J.data());
+  J.topRows<3>() /= lever;
+  out.converged = true;
+  out.error = pose_error(now.frames[kDof], target);
+  out.sigma_bound = singular_bound(J);
+  q = current;
+  return out;
+}
+
+// A verified root q (in place) whose error is above the rounding, finished by full_steps() where
+// they get it there: refine() stops polishing at the first step that gains less than twofold,
+// which a step still damped after rejections on the way can be (a tilted-UR5 root at q5 = 0,
+// sigma_min 0.03, stopped at 5.7e-13 m; one full step from there reaches 3e-16). The error and,
+// where the steps got there, the singular bound at q (else 0) are updated.
+inline void finish(const Chain& chain, const ChainShape& shape, const Frame& target, Joints& q,
+                   double goal, double lever, PoseError& error, double& sigma_bound) {
+  if (at_rounding(error, goal, lever)) return;
+  Joints trial = q;
+  const FullStepRoot quick = full_steps(chain, shape, target, trial, goal, lever);
+  if (!quick.converged || !(quick.error.largest() < error.largest())) return;
+  q = trial;
+  error = quick.error;
+  sigma_bound = quick.sigma_bound;
+}
+
+}  // namespace dhkin::general6r

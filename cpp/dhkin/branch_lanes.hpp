@@ -156,8 +156,7 @@ inline bool spherical_wrist_lanes(const SphericalGeometry& g, const Frame& T,
   const Lanes cosine_scaled = distance * distance - upper * upper - fore * fore;
   const Mask merged = small_angle(sine_scaled, abs(cosine_scaled), kMergeAngle);
   sine_scaled = select(merged, Lanes(0.0), sine_scaled);
-  const LaneBits elbow_flag =
-      bits_if(merged || sine_scaled <= kFlagBand * 2 * upper * fore, kElbow);
+  const LaneBits elbow_flag = bits_if(merged || elbow_flagged(g, sine_scaled), kElbow);
   const Lanes psi = atan2(select(down, -sine_scaled, sine_scaled), cosine_scaled);
   const Lanes turn3 = psi - g.bend_at_zero;
   const SinCosT<Lanes> t3 = sincos(turn3);

@@ -214,6 +214,13 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
   }
 }
 
+// Whether the elbow is flagged: |sin psi| <= kFlagBand, from sine_scaled = 2 L2 L3 sin(psi) (0
+// where merged).
+template <class V>
+DHKIN_INLINE MaskOf<V> elbow_flagged(const SphericalGeometry& g, V sine_scaled) {
+  return sine_scaled <= kFlagBand * 2 * g.upper_length * g.forearm_length;
+}
+
 // How far turn23 (= turn2 + turn3) may be off for a wrist centre at `distance` from axis 2
 // known to +-clamp (m), `sine_scaled` = 2 L2 L3 sin(psi) (0 where the elbow merged). With
 // cos(psi) = (distance^2 - L2^2 - L3^2) / (2 L2 L3), the distance moves cos(psi) by at most
@@ -237,7 +244,7 @@ DHKIN_INLINE V elbow_uncertainty(const SphericalGeometry& g, V distance, V sine_
   const V shift = distance * clamp / (upper * fore);  // of cos(psi)
   const V psi = min(2.0 * upper * fore * shift / max(sine_scaled, V(1e-300)), sqrt(2.0 * shift));
   const V turn = psi * (distance + fore) / max(distance, V(1e-300));
-  return select(sine_scaled <= kFlagBand * 2 * upper * fore, turn, V(0.0));
+  return select(elbow_flagged(g, sine_scaled), turn, V(0.0));
 }
 
 // Both wrist branches for one arm turned by turn23 about `lateral` (wrists above).
@@ -305,7 +312,7 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
     cosine_scaled[s] = distance * distance - upper * upper - fore * fore;
     merged[s] = small_angle(sine_scaled[s], abs(cosine_scaled[s]), kMergeAngle);
     sine_scaled[s] = select(merged[s], V(0.0), sine_scaled[s]);
-    elbow_flag[s] = bits_if(merged[s] || sine_scaled[s] <= kFlagBand * 2 * upper * fore, kElbow);
+    elbow_flag[s] = bits_if(merged[s] || elbow_flagged(g, sine_scaled[s]), kElbow);
     elbow_near[s] = bits_if(distance <= request.seed_length, kElbow);
     elbow_seeded[s] = elbow_near[s] != 0 && (request.use_seed & kElbow) != 0;
     // not where q2 is free (the centre on axis 2: the elbow's own seeded candidate)

@@ -68,15 +68,6 @@ struct FullStepRoot {
   double sigma_bound = 0.0;  // singular_bound of the scaled Jacobian at the root
 };
 
-// Full Gauss-Newton steps from q towards `target`, each solved by LU of the 6 x 6 Jacobian, while
-// each is within newton::kMaxJointStep per joint and shrinks the squared error
-// newton::kPolishGain-fold (refine()'s polishing rule), at most kFullSteps, until the error is at
-// the rounding and within newton::kRefineFraction of `goal` (at_rounding: refine()'s
-// convergence). Where they get there, q (in place) is the root, with its error and singular bound
-// (linear rows of the Jacobian over `lever`). Where not (a start farther off, a singular root's
-// linear convergence, a nearly singular Jacobian's error that stops shrinking above the
-// rounding), q is left as it was: refine() takes it from the start, as it did before.
-//
 // Whether an error is at the rounding (kRoundingUlps, per metre of `lever`) and within
 // newton::kRefineFraction of `goal`: where full_steps() stops.
 inline bool at_rounding(const PoseError& e, double goal, double lever) {
@@ -86,6 +77,14 @@ inline bool at_rounding(const PoseError& e, double goal, double lever) {
          e.rotation <= converged;
 }
 
+// Full Gauss-Newton steps from q towards `target`, each solved by LU of the 6 x 6 Jacobian, while
+// each is within newton::kMaxJointStep per joint and shrinks the squared error
+// newton::kPolishGain-fold (refine()'s polishing rule), at most kFullSteps, until the error is at
+// the rounding and within newton::kRefineFraction of `goal` (at_rounding: refine()'s
+// convergence). Where they get there, q (in place) is the root, with its error and singular bound
+// (linear rows of the Jacobian over `lever`). Where not (a start farther off, a singular root's
+// linear convergence, a nearly singular Jacobian's error that stops shrinking above the
+// rounding), q is left as it was: refine() takes it from the start, as it did before.
 inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, const Frame& target,
                                Joints& q, double goal, double lever) {
   const auto at_rounding = [&](const PoseError& e) {

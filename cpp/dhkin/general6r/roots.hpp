@@ -75,6 +75,14 @@ inline double smallest_singular(const Chain& chain, const Joints& q, double leve
   return Eigen::JacobiSVD<Jacobian>(J).singularValues()(kDof - 1);
 }
 
+// smallest_singular at a root, or full_steps()' bound where that was above the band (taken at
+// the unwrapped values, which differ from q by rounding: above the band the bound is the flag's
+// answer either way).
+inline double root_singular(const Chain& chain, const Joints& q, double lever, double band,
+                            double sigma_bound) {
+  return sigma_bound > band ? sigma_bound : smallest_singular(chain, q, lever, band);
+}
+
 // Joint values wrapped to (-pi, pi].
 inline Joints wrapped(const Joints& q) {
   Joints out;
@@ -249,11 +257,7 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
       probe[duplicate] = probe[duplicate] || wants_probe;
       continue;
     }
-    // the bound at the unwrapped values, where full_steps() had the Jacobian (the wrapped ones
-    // differ by rounding): above the band it is the flag's answer, as smallest_singular's
-    const double sigma =
-        sigma_bound > band ? sigma_bound : smallest_singular(chain, q, lever, band);
-    roots.push_back({q, error, sigma});
+    roots.push_back({q, error, root_singular(chain, q, lever, band, sigma_bound)});
     probe.push_back(wants_probe);
   }
   // near a fold, the partner of each root with a small singular value (its eliminated joint may
@@ -272,9 +276,7 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     finish(chain, shape, target, partner, goal, lever, error, sigma_bound);
     partner = wrapped(partner);
     if (known(partner) >= 0) continue;
-    const double sigma =
-        sigma_bound > band ? sigma_bound : smallest_singular(chain, partner, lever, band);
-    roots.push_back({partner, error, sigma});
+    roots.push_back({partner, error, root_singular(chain, partner, lever, band, sigma_bound)});
   }
   return failed;
 }

@@ -210,6 +210,21 @@ COLUMNS: tuple[str, ...] = ("generated", "validators", "fk vs pin", "vendor", "i
 IK_COLUMNS: tuple[str, ...] = ("ik vs pin", "ik vs vendor")
 
 
+def longest_first(robots: list[Robot]) -> list[int]:
+    """The indices of ``robots`` in the order a pool of workers should start their checks: the
+    general 6R solver's, the numerical IK's and the refined closed-form tables' first (10-40 s
+    each against 1-4 s for an exact family's; docs/check.md), so that the workers end together
+    instead of one finishing a long check alone after the others ran out of robots."""
+    def slow(robot: Robot) -> bool:
+        try:
+            family = robot.ik_family
+            return family in ("general6r", "numerical") or robot.ik_solver.fit.refine
+        except DhkinError:
+            return False
+
+    return sorted(range(len(robots)), key=lambda k: not slow(robots[k]))
+
+
 def check_robot(robot: Robot, options: CheckOptions) -> RobotCheck:
     """Run every check on one robot, timing each; a check that raises a dhkin error is a failed
     cell."""

@@ -54,22 +54,25 @@ def cmd_check(args: argparse.Namespace) -> int:
     results = []
     jobs = min(len(robots), default_workers() if args.jobs is None else args.jobs)
     with contextlib.ExitStack() as stack:
-        if jobs > 1:  # the pool first: its processes start before any thread of this one
+        pool = stack.enter_context(_pool(jobs)) if jobs > 1 else None  # before any thread here
+        # disable=None: no bar when stderr is not a terminal (tqdm's own test). It counts the
+        # robots checked, in whatever order they finish.
+        bar = stack.enter_context(tqdm(total=len(robots), desc="dhkin check", unit="robot",
+                                       file=sys.stderr, disable=None, leave=False))
+        if pool is not None:
             from dhkin.checks import longest_first
 
-            pool = stack.enter_context(_pool(jobs))
             # started longest first, read (and printed) in the order named
             started_checks = {k: pool.apply_async(_check_in_worker,
-                                                  ((names[k], replace(options, progress=False)),))
+                                                  ((names[k], replace(options, progress=False)),),
+                                                  callback=lambda _: bar.update())
                               for k in longest_first(robots)}
             checked = (started_checks[k].get() for k in range(len(names)))
         else:
             checked = (check_robot(robot, options) for robot in robots)
-        # disable=None: no bar when stderr is not a terminal (tqdm's own test).
-        bar = stack.enter_context(tqdm(checked, total=len(robots), desc="dhkin check",
-                                       unit="robot", file=sys.stderr, disable=None,
-                                       leave=False))
-        for result in bar:
+        for result in checked:
+            if pool is None:
+                bar.update()
             results.append(result)
             tqdm.write(check_report.robot_line(result, shown), file=sys.stdout)
             sys.stdout.flush()

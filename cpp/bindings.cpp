@@ -23,6 +23,7 @@
 #include "dhkin/pipeline.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
+#include "dhkin/right_svd.hpp"
 #include "dhkin/solver.hpp"
 
 namespace nb = nanobind;
@@ -670,6 +671,27 @@ NB_MODULE(_core, m) {
           return out;
         },
         "x"_a, "x wrapped to (-pi, pi] per element.");
+
+  m.def("right_svd",
+        [](Input<double, nb::shape<6, 6>> A) {
+          dhkin::Matrix6 matrix;
+          for (int r = 0; r < 6; ++r) {
+            for (int c = 0; c < 6; ++c) matrix(r, c) = A(r, c);
+          }
+          const dhkin::RightSvd svd = dhkin::right_svd(matrix);
+          auto values = new_array<double>({6});
+          auto V = new_array<double>({6, 6});
+          auto AV = new_array<double>({6, 6});
+          for (int r = 0; r < 6; ++r) {
+            values.data()[r] = svd.values(r);
+            for (int c = 0; c < 6; ++c) {
+              V.data()[6 * r + c] = svd.V(r, c);
+              AV.data()[6 * r + c] = svd.AV(r, c);
+            }
+          }
+          return nb::make_tuple(values, V, AV);
+        },
+        "A"_a, "(singular values largest first, V, A V) of a 6 x 6 matrix by one-sided Jacobi (right_svd.hpp).");
 
   nb::class_<ChainModel>(m, "Chain")
       .def(nb::init<Input<double, nb::shape<-1, 4, 4>>, Input<bool, nb::ndim<1>>,

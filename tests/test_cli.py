@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 import dhkin
+from dhkin.checks import longest_first
 from dhkin.cli import main
 from dhkin.validators import run_check_urdf
 from dhkin.vendors import vendor_dir
@@ -429,6 +430,18 @@ def test_check_prints_one_line_per_robot_and_writes_every_figure(capsys, tmp_pat
     assert [line.split()[:5] for line in out_1.splitlines()[2:4]] \
         == [line.split()[:5] for line in lines[2:4]]
     assert _without_seconds(json.loads(one_by_one.read_text())) == _without_seconds(data)
+
+
+def test_check_starts_the_longest_checks_first_and_prints_in_the_order_named(capsys) -> None:
+    """The pool starts the general 6R, numerical and refined robots' checks first
+    (dhkin.checks.longest_first); the lines come in the order the robots were named."""
+    robots = [dhkin.load(name) for name in ("ur5", "xarm6", "abb_irb1200_7_70",
+                                            "ur5e_calibrated", "planar_2r")]
+    assert longest_first(robots) == [1, 3, 4, 0, 2]
+    code, out, _ = run(capsys, "check", "ur5", "planar_2r", "--ik-poses", "10",
+                       "--vendor-poses", "10", "--jobs", "2")
+    assert code == 0, out
+    assert [line.split()[0] for line in out.splitlines()[2:4]] == ["ur5", "planar_2r"]
 
 
 def _without_seconds(data: Any) -> Any:

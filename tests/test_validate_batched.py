@@ -93,3 +93,44 @@ def test_a_faulty_ik_fails_both_runs_sample_for_sample() -> None:
     assert figures(batched) == figures(by_pose)
     batched, by_pose = both_runs(robot, reference=REFERENCE_URDFS / "ur5.urdf")
     assert not batched.ok and figures(batched) == figures(by_pose)
+
+
+class FaultyGeneral6R(dhkin.Robot):
+    """xArm6 (general 6R solver) whose unseeded answers, batch and pose by pose alike, depend on
+    a hash of the target: some poses get nothing (unsolved), one root shifted (wrong), or lose
+    their first root (the sampled q's, else a root the multistart reference finds: missing or
+    missing_branch). Seeded answers (the continuity call) are dhkin's own."""
+
+    def ik_batch_detailed(self, T: Any, q_seed: Any = None, *args: Any, **kwargs: Any) -> Any:
+        batch = super().ik_batch_detailed(T, q_seed, *args, **kwargs)
+        if q_seed is not None:
+            return batch
+        q, valid = batch.q.copy(), batch.valid.copy()
+        for k, target in enumerate(np.reshape(T, (-1, 4, 4))):
+            kind = int(abs(target[:3, 3].sum()) * 1e6)
+            rows = np.flatnonzero(valid[k])
+            if kind % 11 == 0:
+                valid[k] = False
+            elif kind % 11 == 1 and len(rows):
+                q[k, rows[0], 2] += 1e-6
+            elif kind % 11 in (2, 3, 4) and len(rows) > 1:
+                valid[k, rows[0]] = False
+        order = np.argsort(~valid, axis=1, kind="stable")  # valid rows first, in their order
+        return replace(batch, q=np.take_along_axis(q, order[..., None], axis=1),
+                       valid=np.take_along_axis(valid, order, axis=1))
+
+    def ik(self, T: Any, q_seed: Any = None, *args: Any, **kwargs: Any) -> Any:
+        seed = None if q_seed is None else np.asarray(q_seed)[None]
+        batch = self.ik_batch_detailed(np.asarray(T)[None], seed)
+        return IKSolutions(q=batch.q[0][batch.valid[0]])
+
+
+def test_a_faulty_general_6r_ik_fails_both_runs_sample_for_sample() -> None:
+    """The general 6R arms' batched run (unseeded calls, the multistart reference) gives the
+    pose-by-pose report when the IK fails too."""
+    robot = FaultyGeneral6R(dhkin.load("xarm6").table)
+    assert robot.ik_family == "general6r"
+    batched, by_pose = both_runs(robot, reference="exact")
+    outcomes = {o for o, count in batched.counts.items() if count}
+    assert outcomes == {"success", "wrong", "no_solution", "missing", "missing_branch"}
+    assert figures(batched) == figures(by_pose)

@@ -19,7 +19,8 @@ listed in the cell without failing it); the IK is cross-validated (dhkin.validat
   targets made and the solutions checked on the vendor URDF (its base and tip frames from
   VENDOR_REFERENCES), so a bug shared by the table's own model and the IK cannot hide. It runs on
   ``vendor_poses`` uniform poses (default VENDOR_POSES = 2000, fewer than the main run to keep
-  the job's time reasonable) plus the special-angle and near-singular sets (n/10 each).
+  the job's time reasonable; the numerical IK on at most NUMERICAL_POSES, as in "ik vs pin")
+  plus the special-angle and near-singular sets (n/10 each).
 """
 
 from __future__ import annotations
@@ -194,7 +195,8 @@ def check_ik_vendor(robot: Robot, reference_dir: Path | None, poses: int,
     vendor = VENDOR_REFERENCES[robot.name]
     if reference_dir is None or not (reference_dir / vendor.file).is_file():
         return CheckCell(False, f"missing {vendor.file}")
-    report = validate(robot, n=poses, seed=seed, progress=progress and sys.stderr.isatty(),
+    n = poses if robot.complete_ik else min(poses, NUMERICAL_POSES)
+    report = validate(robot, n=n, seed=seed, progress=progress and sys.stderr.isatty(),
                       reference=reference_dir / vendor.file, base=vendor.base, tip=vendor.tip)
     figures = validation_figures(report)
     return CheckCell(report.ok, f"{vendor.file}: {_ik_text(figures)}", figures=figures)
@@ -206,6 +208,21 @@ COLUMNS: tuple[str, ...] = ("generated", "validators", "fk vs pin", "vendor", "i
 
 #: The columns whose cells are IK validations (with figures; see :func:`validation_figures`).
 IK_COLUMNS: tuple[str, ...] = ("ik vs pin", "ik vs vendor")
+
+
+def longest_first(robots: list[Robot]) -> list[int]:
+    """The indices of ``robots`` in the order a pool of workers should start their checks: the
+    general 6R solver's, the numerical IK's and the refined closed-form tables' first (10-40 s
+    each against 1-4 s for an exact family's; docs/check.md), so that the workers end together
+    instead of one finishing a long check alone after the others ran out of robots."""
+    def slow(robot: Robot) -> bool:
+        try:
+            family = robot.ik_family
+            return family in ("general6r", "numerical") or robot.ik_solver.fit.refine
+        except DhkinError:
+            return False
+
+    return sorted(range(len(robots)), key=lambda k: not slow(robots[k]))
 
 
 def check_robot(robot: Robot, options: CheckOptions) -> RobotCheck:

@@ -55,9 +55,14 @@ def cmd_check(args: argparse.Namespace) -> int:
     jobs = min(len(robots), default_workers() if args.jobs is None else args.jobs)
     with contextlib.ExitStack() as stack:
         if jobs > 1:  # the pool first: its processes start before any thread of this one
+            from dhkin.checks import longest_first
+
             pool = stack.enter_context(_pool(jobs))
-            checked = pool.imap(_check_in_worker, [(name, replace(options, progress=False))
-                                                   for name in names])
+            # started longest first, read (and printed) in the order named
+            started_checks = {k: pool.apply_async(_check_in_worker,
+                                                  ((names[k], replace(options, progress=False)),))
+                              for k in longest_first(robots)}
+            checked = (started_checks[k].get() for k in range(len(names)))
         else:
             checked = (check_robot(robot, options) for robot in robots)
         # disable=None: no bar when stderr is not a terminal (tqdm's own test).

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "dhkin/general6r/roots.hpp"
+#include "dhkin/right_svd.hpp"
 
 namespace dhkin::general6r {
 
@@ -82,11 +83,12 @@ inline PoseError settle_across(const Chain& chain, const Frame& target, Joints& 
     }
     Eigen::Matrix<double, 6, 1> residual;
     for (int r = 0; r < 6; ++r) residual(r) = r < 3 ? e[r] / lever : e[r];
-    const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const RightSvd svd = right_svd(J);
     Eigen::Matrix<double, kDof, 1> dq = Eigen::Matrix<double, kDof, 1>::Zero();
     for (int w = 0; w < kDof; ++w) {
-      const double sigma = svd.singularValues()(w);
-      if (sigma > flat) dq += (svd.matrixU().col(w).dot(residual) / sigma) * svd.matrixV().col(w);
+      // u . r / sigma, with sigma u = J v
+      const double sigma = svd.values(w);
+      if (sigma > flat) dq += (svd.AV.col(w).dot(residual) / (sigma * sigma)) * svd.V.col(w);
     }
     Joints trial;
     for (int j = 0; j < kDof; ++j) trial[j] = q[j] + dq(j);
@@ -121,14 +123,12 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
   bool on_floor = false;  // the last step kept walked a valley's verifying floor
   for (int trial_step = 0; trial_step < kWalkSteps; ++trial_step) {
     const Jacobian J = scaled_jacobian(chain, q, lever);
-    const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullV);
-    on_curve = svd.singularValues()(kDof - 1) <= tolerance;
+    const RightSvd svd = right_svd(J);
+    on_curve = svd.values(kDof - 1) <= tolerance;
     Eigen::Matrix<double, kDof, 1> offset, step = Eigen::Matrix<double, kDof, 1>::Zero();
     for (int j = 0; j < kDof; ++j) offset(j) = wrap(seed[j] - q[j]);
     for (int w = 0; w < kDof; ++w) {
-      if (svd.singularValues()(w) <= band) {
-        step += svd.matrixV().col(w).dot(offset) * svd.matrixV().col(w);
-      }
+      if (svd.values(w) <= band) step += svd.V.col(w).dot(offset) * svd.V.col(w);
     }
     const double longest = step.cwiseAbs().maxCoeff();
     if (longest <= tolerance) break;  // nearer than the tolerance (rad): no step it could verify

@@ -17,6 +17,7 @@
 #include "dhkin/general6r/full_steps.hpp"
 #include "dhkin/newton.hpp"
 #include "dhkin/plan.hpp"
+#include "dhkin/right_svd.hpp"
 
 namespace dhkin::general6r {
 
@@ -72,7 +73,7 @@ inline double smallest_singular(const Chain& chain, const Joints& q, double leve
   const Jacobian J = scaled_jacobian(chain, q, lever);
   const double bound = singular_bound(J);
   if (bound > band) return bound;
-  return Eigen::JacobiSVD<Jacobian>(J).singularValues()(kDof - 1);
+  return right_svd(J).values(kDof - 1);
 }
 
 // smallest_singular at a root, or full_steps()' bound where that was above the band (taken at

@@ -7,10 +7,11 @@ a complete IK (a closed-form family or the general 6R solver), unless ``isolate`
 child process. What changes is how the work is done, not what is checked:
 
 * **One call per pose, as before, made as a batch.** The IK under test is
-  ``robot.ik(T, q_seed=q)`` (:func:`~dhkin.validation.adapters.own_ik`); here
-  ``robot.ik_batch_detailed(targets, q_seed=q)`` answers every sample at once, pose by pose the
-  same solutions in the same order (tests/test_ik_batch.py and tests/test_validate.py assert
-  it). A batch that raises falls back on the guarded pose-by-pose run.
+  ``robot.ik(T, q_seed=q)`` (:func:`~dhkin.validation.adapters.own_ik`; unseeded, ``robot.ik(T)``,
+  for a general 6R arm); here ``robot.ik_batch_detailed(targets, q_seed=q)`` (or without seeds)
+  answers every sample at once, pose by pose the same solutions in the same order
+  (tests/test_ik_batch.py and tests/test_validate.py assert it). A batch that raises falls back
+  on the guarded pose-by-pose run.
 * **Verification on arrays.** Every returned solution goes through Pinocchio on the reference
   in one call; finite values, joint limits, residuals and the distance to the sampled q are
   array operations. A sample that all of them clear (solutions returned, every one finite,
@@ -23,7 +24,9 @@ child process. What changes is how the work is done, not what is checked:
   answer under test (the pose-by-pose run made the identical call twice), so every branch is
   returned by construction: the samples are counted (``branch_checked``) without a second call.
   For another IK (:func:`~dhkin.validation.validate` with ``ik=``) the branches are a second,
-  independent answer and the check runs pose by pose.
+  independent answer and the check runs pose by pose. A general 6R arm's roots are checked
+  against the multistart reference (:mod:`dhkin.validation.multistart`) on its samples, as in
+  the pose-by-pose run.
 * **Continuity.** The samples of the singular sets that succeeded are solved again in one batch
   with their perturbed seeds; the nearest solution to each seed is found on arrays, and any
   sample not cleared goes through :func:`~dhkin.validation.sample_checks.check_continuity`.
@@ -39,19 +42,21 @@ from dhkin.errors import DhkinError
 from dhkin.transforms import pose_error
 from dhkin.validation.calls import CallResult
 from dhkin.validation.matching import wrap
+from dhkin.validation.multistart import RootReference, check_reference
 from dhkin.validation.references import TargetModel
 from dhkin.validation.report import ValidationReport
 from dhkin.validation.sample_checks import check_continuity, check_sample
-from dhkin.validation.samples import CONTINUITY_DISTANCE, CONTINUITY_SETS
+from dhkin.validation.samples import CONTINUITY_DISTANCE, CONTINUITY_SETS, reference_samples
 from dhkin.validation.tally import Tally
 
 
 class Answers:
     """The solutions of N poses from one batch, as flat rows: ``rows`` (M, dof) in pose order,
-    ``owner`` (M,) the pose of each row, ``starts`` (N + 1,) where each pose's rows begin."""
+    ``owner`` (M,) the pose of each row, ``starts`` (N + 1,) where each pose's rows begin.
+    ``seeds``: one per pose, or None (unseeded)."""
 
     def __init__(self, robot: Arm, targets: NDArray[np.float64],
-                 seeds: NDArray[np.float64]) -> None:
+                 seeds: NDArray[np.float64] | None) -> None:
         batch = robot.ik_batch_detailed(targets, q_seed=seeds)
         self.rows: NDArray[np.float64] = batch.q[batch.valid]
         self.owner: NDArray[np.int64] = np.nonzero(batch.valid)[0]
@@ -97,17 +102,20 @@ class Answers:
 def check_all_batched(robot: Arm, model: TargetModel, q: NDArray[np.float64], sets: list[str],
                       perturbed: NDArray[np.float64], targets: NDArray[np.float64],
                       labels: list[str], tolerance: float, joint_tolerance: float,
-                      report: ValidationReport) -> bool:
+                      report: ValidationReport, reference: RootReference | None = None) -> bool:
     """Check every sample with dhkin's own IK answering in batches (see the module docstring);
     fill the report as the pose-by-pose run does. False (nothing filled) when the batch
-    raises: the caller then runs pose by pose."""
+    raises: the caller then runs pose by pose. ``reference``: the multistart reference of a
+    general 6R arm, whose IK is then called unseeded and checked against it."""
+    unseeded = reference is not None
     try:
-        first = Answers(robot, targets, q)
+        first = Answers(robot, targets, None if unseeded else q)
     except DhkinError:
         return False
     allowed = tolerance + model.deviation
     position, rotation, clean = first.screen(robot, model, targets, allowed)
-    # The own IK takes q_seed, so every joint is compared (sample_checks.compared_joints).
+    # Every joint within the joint tolerance: a success however many joints
+    # sample_checks.compared_joints compares (all of them for a seeded call).
     success = clean & (first.nearest(robot, q) <= joint_tolerance)
     n = len(sets)
     outcome = np.where(success, "success", "").astype(object)
@@ -117,13 +125,22 @@ def check_all_batched(robot: Arm, model: TargetModel, q: NDArray[np.float64], se
     row_errors: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
     for k in np.flatnonzero(~success).tolist():
         checked, _ = check_sample(robot, model, q[k], targets[k], first.call(k), tolerance,
-                                  joint_tolerance, True)
+                                  joint_tolerance, not unseeded)
         outcome[k], detail[k] = checked.outcome, checked.detail
         row_errors[k] = (checked.position, checked.rotation)
         tally.residuals(checked.position, checked.rotation)
-    # Branches: dhkin's own complete answer is the answer under test (module docstring).
     succeeded = outcome == "success"
-    report.branch_checked = int(succeeded.sum())
+    missing: dict[int, list[str]] = {}
+    if reference is None:
+        # Branches: dhkin's own complete answer is the answer under test (module docstring).
+        report.branch_checked = int(succeeded.sum())
+    else:
+        # Roots: the multistart reference's, on the samples it is run on.
+        for k in np.flatnonzero(succeeded & reference_samples(sets)).tolist():
+            report.branch_checked += 1
+            outcome[k], detail[k], missing[k] = check_reference(
+                model, reference, targets[k], first.of(k), tolerance, joint_tolerance)
+        succeeded = outcome == "success"
     in_sets = np.array([s in CONTINUITY_SETS for s in sets], dtype=bool)
     moved = np.flatnonzero(succeeded & in_sets & np.all(np.isfinite(perturbed), axis=1))
     report.continuity_checked = len(moved)
@@ -147,6 +164,6 @@ def check_all_batched(robot: Arm, model: TargetModel, q: NDArray[np.float64], se
             errors = (position[rows], rotation[rows])
         tally.add(report, k, sets[k], labels[k], str(outcome[k]), detail[k], q[k], targets[k],
                   first.call(k).solutions, errors[0], errors[1], perturbed[k],
-                  returned_perturbed.get(k, []), [])
+                  returned_perturbed.get(k, []), missing.get(k, []))
     tally.finish(report)
     return True

@@ -185,8 +185,7 @@ def validate(robot: Arm, ik: IKCallable | None = None, n: int = 10_000, seed: in
     q, sets = sample_joint_vectors(robot, n, settings.seed)
     return run_samples(robot, model, callable_ik, q, sets,
                        perturbed_seeds(robot, q, sets, settings.seed), settings,
-                       batched=(ik is None and robot.complete_ik and not settings.isolate
-                                and not needs_reference(robot)))
+                       batched=ik is None and robot.complete_ik and not settings.isolate)
 
 
 def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.float64],
@@ -210,27 +209,29 @@ def run_samples(robot: Arm, model: TargetModel, ik: IKCallable, q: NDArray[np.fl
         report.reference_deviation = {"position_max": float(position.max()),
                                       "rotation_max": float(rotation.max())}
         model.deviation = max(report.reference_deviation.values())
+    reference = (RootReference(robot, model)
+                 if settings.complete_expected and needs_reference(robot) else None)
     if not (batched and check_all_batched(robot, model, q, sets, perturbed, targets, labels,
                                           settings.tolerance, settings.joint_tolerance,
-                                          report)):
+                                          report, reference)):
         with IKCaller(ik, robot, settings.timeout, settings.isolate) as caller:
             _check_all(robot, model, caller, q, sets, perturbed, targets, labels, settings,
-                       report)
+                       report, reference)
     report.seconds = time.perf_counter() - started
     return report
 
 
 def _check_all(robot: Arm, model: TargetModel, caller: IKCaller, q: NDArray[np.float64],
                sets: list[str], perturbed: NDArray[np.float64], targets: NDArray[np.float64],
-               labels: list[str], settings: RunSettings, report: ValidationReport) -> None:
+               labels: list[str], settings: RunSettings, report: ValidationReport,
+               reference: RootReference | None) -> None:
     """Call and check every sample; fill the report's counts, residuals and failures. The IK
     gets read-only copies (see :class:`IKCaller`): ``q``, ``targets`` and ``perturbed`` stay
-    the validator's own, for the checks and the failure file."""
+    the validator's own, for the checks and the failure file. ``reference``: the multistart
+    reference of a general 6R arm (its IK is then called unseeded and checked against it)."""
     tolerance, joint_tolerance = settings.tolerance, settings.joint_tolerance
     tally = Tally()
     seeded = takes_seed(caller.ik)
-    reference = (RootReference(robot, model)
-                 if settings.complete_expected and needs_reference(robot) else None)
     check_branches = settings.complete_expected and robot.complete_ik and reference is None
     referenced = reference_samples(sets)
     # an IK complete without a seed (the general 6R solver's arms) is run unseeded: a seed may

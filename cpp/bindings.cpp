@@ -673,12 +673,15 @@ NB_MODULE(_core, m) {
         "x"_a, "x wrapped to (-pi, pi] per element.");
 
   m.def("right_svd",
-        [](Input<double, nb::shape<6, 6>> A) {
-          dhkin::Matrix6 matrix;
+        [](Input<double, nb::shape<6, 6>> A, std::optional<Input<double, nb::shape<6, 6>>> start) {
+          dhkin::Matrix6 matrix, start_V;
           for (int r = 0; r < 6; ++r) {
-            for (int c = 0; c < 6; ++c) matrix(r, c) = A(r, c);
+            for (int c = 0; c < 6; ++c) {
+              matrix(r, c) = A(r, c);
+              if (start) start_V(r, c) = (*start)(r, c);
+            }
           }
-          const dhkin::RightSvd svd = dhkin::right_svd(matrix);
+          const dhkin::RightSvd svd = start ? dhkin::right_svd(matrix, start_V) : dhkin::right_svd(matrix);
           auto values = new_array<double>({6});
           auto V = new_array<double>({6, 6});
           auto AV = new_array<double>({6, 6});
@@ -691,7 +694,8 @@ NB_MODULE(_core, m) {
           }
           return nb::make_tuple(values, V, AV);
         },
-        "A"_a, "(singular values largest first, V, A V) of a 6 x 6 matrix by one-sided Jacobi (right_svd.hpp).");
+        "A"_a, "start"_a = nb::none(),
+        "(singular values largest first, V, A V) of a 6 x 6 matrix by one-sided Jacobi (right_svd.hpp), from the orthogonal `start` if given.");
 
   nb::class_<ChainModel>(m, "Chain")
       .def(nb::init<Input<double, nb::shape<-1, 4, 4>>, Input<bool, nb::ndim<1>>,

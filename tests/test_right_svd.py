@@ -52,6 +52,24 @@ def test_singular_values_and_vectors_agree_with_lapack_to_the_rounding():
         np.testing.assert_allclose(np.linalg.norm(AV, axis=0), values, rtol=4 * EPS, atol=0)
 
 
+def test_a_warm_start_from_a_nearby_matrix_gives_the_same_svd():
+    """Started from the right singular vectors of a matrix a step away (as settle_across does
+    from one Newton step to the next), the SVD is the same to the rounding: V carries the
+    start's own departure from orthogonality, so twice the allowance."""
+    A = _random_matrices(3_000, seed=33)
+    rng = np.random.default_rng(34)
+    identity = np.eye(6)
+    for matrix, size in zip(A, np.tile([1e-1, 1e-3, 1e-8], 1_000), strict=True):
+        _, start, _ = _core.right_svd(matrix)
+        moved = matrix + size * rng.normal(size=(6, 6))
+        values, V, AV = _core.right_svd(moved, start)
+        reference = np.linalg.svd(moved, compute_uv=False)
+        scale = reference[0]
+        np.testing.assert_allclose(values, reference, rtol=0, atol=ROUNDING * EPS * scale)
+        np.testing.assert_allclose(V.T @ V, identity, rtol=0, atol=2 * ROUNDING * EPS)
+        np.testing.assert_allclose(AV, moved @ V, rtol=0, atol=ROUNDING * EPS * scale)
+
+
 def test_the_null_space_of_pinocchios_jacobian_at_singular_joint_values():
     """UR5 (Pinocchio on its generated URDF) at two q5 = 0 poses (one with the elbow stretched)
     and at (0, -90, 0, 90, 0, 90) deg, where its Jacobian has three null directions: the right

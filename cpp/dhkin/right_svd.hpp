@@ -38,22 +38,13 @@ struct RightSvd {
 // The cap is a guard, never reached on finite input.
 constexpr int kMaxJacobiSweeps = 60;
 
-// The SVD of A (one-sided Jacobi). A pair of columns (p, q) counts as orthogonal when
-// |a_p . a_q| <= eps sqrt(|a_p|^2 |a_q|^2), the rounding of the dot product itself.
-// A is first scaled by a power of two (exact) so that its largest entry lies in [1, 2): the
-// squared column norms and inner products can then neither overflow nor lose a column that
-// matters to underflow (one of entries below 1e-154 of the largest is below its rounding).
-inline RightSvd right_svd(const Matrix6& A) {
+namespace jacobi {
+
+// Rotations of the column pairs of `work` (and the same on V) until every pair is orthogonal: a
+// pair (p, q) counts as such when |a_p . a_q| <= eps sqrt(|a_p|^2 |a_q|^2), the rounding of the
+// dot product itself.
+inline void sweep(Padded& work, Padded& V) {
   constexpr double eps = std::numeric_limits<double>::epsilon();
-  const double largest = A.cwiseAbs().maxCoeff();
-  // 2^-exponent in two factors, each within range even for subnormal or huge entries
-  const int exponent = largest > 0.0 && std::isfinite(largest) ? std::ilogb(largest) : 0;
-  const double up_first = std::ldexp(1.0, -(exponent / 2));
-  const double up_second = std::ldexp(1.0, -(exponent - exponent / 2));
-  // Columns of eight rows (the last two zero), so that Eigen's packets take a column whole.
-  Padded work = Padded::Zero(), V = Padded::Zero();
-  work.topRows<6>() = A * up_first * up_second;
-  V.topRows<6>().setIdentity();
   for (int sweep = 0; sweep < kMaxJacobiSweeps; ++sweep) {
     bool rotated = false;
     for (int p = 0; p < 5; ++p) {
@@ -80,20 +71,63 @@ inline RightSvd right_svd(const Matrix6& A) {
     }
     if (!rotated) break;
   }
-  // largest first
+}
+
+// The power of two (as two factors, each within range even for subnormal or huge entries) that
+// brings the largest entry of A into [1, 2): the squared column norms and inner products can
+// then neither overflow nor lose a column that matters to underflow (one of entries below 1e-154
+// of the largest is below its rounding).
+struct Scale {
+  double first = 1.0, second = 1.0;
+  explicit Scale(const Matrix6& A) {
+    const double largest = A.cwiseAbs().maxCoeff();
+    const int exponent = largest > 0.0 && std::isfinite(largest) ? std::ilogb(largest) : 0;
+    first = std::ldexp(1.0, -(exponent / 2));
+    second = std::ldexp(1.0, -(exponent - exponent / 2));
+  }
+};
+
+// The SVD from the converged columns: values largest first, each with its V and A V column.
+inline RightSvd sorted(const Padded& work, const Padded& V, const Scale& scale) {
   std::array<int, 6> order{0, 1, 2, 3, 4, 5};
   Vector6d norms;
   for (int w = 0; w < 6; ++w) norms(w) = work.col(w).norm();
   std::stable_sort(order.begin(), order.end(),
                    [&norms](int a, int b) { return norms(a) > norms(b); });
   RightSvd out;
-  const double down_first = 1.0 / up_first, down_second = 1.0 / up_second;
+  const double down_first = 1.0 / scale.first, down_second = 1.0 / scale.second;
   for (int w = 0; w < 6; ++w) {
     out.values(w) = norms(order[w]) * down_first * down_second;
     out.V.col(w) = V.col(order[w]).head<6>();
     out.AV.col(w) = work.col(order[w]).head<6>() * down_first * down_second;
   }
   return out;
+}
+
+}  // namespace jacobi
+
+// The SVD of A (one-sided Jacobi), A first scaled by a power of two (exact; jacobi::Scale).
+inline RightSvd right_svd(const Matrix6& A) {
+  const jacobi::Scale scale(A);
+  // Columns of eight rows (the last two zero), so that Eigen's packets take a column whole.
+  Padded work = Padded::Zero(), V = Padded::Zero();
+  work.topRows<6>() = A * scale.first * scale.second;
+  V.topRows<6>().setIdentity();
+  jacobi::sweep(work, V);
+  return jacobi::sorted(work, V, scale);
+}
+
+// The SVD of A started from `start`, an orthogonal matrix near A's right singular vectors (those
+// of a Jacobian a Newton step away): A start is then nearly column-orthogonal, and a sweep or two
+// finish what takes six to eight from the identity. The same SVD to the rounding; V = start R
+// carries start's own departure from orthogonality (~1e-15 per SVD it came from) on to it.
+inline RightSvd right_svd(const Matrix6& A, const Matrix6& start) {
+  const jacobi::Scale scale(A);
+  Padded work = Padded::Zero(), V = Padded::Zero();
+  work.topRows<6>() = (A * scale.first * scale.second) * start;
+  V.topRows<6>() = start;
+  jacobi::sweep(work, V);
+  return jacobi::sorted(work, V, scale);
 }
 
 }  // namespace dhkin

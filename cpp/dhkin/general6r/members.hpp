@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "dhkin/general6r/roots.hpp"
@@ -58,9 +59,12 @@ inline double squared_distance(const Joints& a, const Joints& b) {
 // slide a point along the floor towards one of its isolated roots, carrying a member far from
 // the seed. Joints marked `held` keep their values (a member set onto a limit). Steps go on
 // while each shrinks the squared error kPolishGain-fold (Newton's rate; less is the rounding of
-// the arithmetic), at most kMemberBudget. Returns the errors at q.
+// the arithmetic), at most kMemberBudget. The first SVD starts from `start` where given (the
+// right singular vectors at a point nearby), each later one from the step before's. Returns the
+// errors at q.
 inline PoseError settle_across(const Chain& chain, const Frame& target, Joints& q, double lever,
-                               double flat, const JointMask& held = {}) {
+                               double flat, const JointMask& held = {},
+                               const std::optional<Matrix6>& start = std::nullopt) {
   std::array<Frame, kDof + 1> frames;
   double e[6], trial_e[6];
   fk_frames(chain, q.data(), frames.data());
@@ -74,6 +78,7 @@ inline PoseError settle_across(const Chain& chain, const Frame& target, Joints& 
     return size;
   };
   double size = scaled_size(e);
+  std::optional<Matrix6> previous_V = start;
   for (int step = 0; step < kMemberBudget && size > 0.0; ++step) {
     Jacobian J;
     jacobian(chain, frames.data(), J.data());
@@ -83,7 +88,8 @@ inline PoseError settle_across(const Chain& chain, const Frame& target, Joints& 
     }
     Eigen::Matrix<double, 6, 1> residual;
     for (int r = 0; r < 6; ++r) residual(r) = r < 3 ? e[r] / lever : e[r];
-    const RightSvd svd = right_svd(J);
+    const RightSvd svd = previous_V ? right_svd(J, *previous_V) : right_svd(J);
+    previous_V = svd.V;
     Eigen::Matrix<double, kDof, 1> dq = Eigen::Matrix<double, kDof, 1>::Zero();
     for (int w = 0; w < kDof; ++w) {
       // u . r / sigma, with sigma u = J v
@@ -144,10 +150,10 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
     // floor does not verify (an isolated root's valley), Newton as before.
     bool floor_step = false;
     if (on_curve) {
-      settle_across(chain, target, trial, lever, tolerance);
+      settle_across(chain, target, trial, lever, tolerance, JointMask{}, svd.V);
     } else {
       Joints floor = trial;
-      if (floors) settle_across(chain, target, floor, lever, band);
+      if (floors) settle_across(chain, target, floor, lever, band, JointMask{}, svd.V);
       floor_step = floors && check(chain, floor.data(), target).within(tolerance);
       if (floor_step) {
         trial = floor;
@@ -173,7 +179,7 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
       // on a curve of solutions (or a valley's verifying floor): the midpoint, moved across it,
       // verifies near the chord
       const Joints midpoint = middle;
-      settle_across(chain, target, middle, lever, flat);
+      settle_across(chain, target, middle, lever, flat, JointMask{}, svd.V);
       double moved = 0.0;
       for (int j = 0; j < kDof; ++j) {
         moved = std::max(moved, std::abs(wrap(middle[j] - midpoint[j])));

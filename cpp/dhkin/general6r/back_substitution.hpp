@@ -113,27 +113,33 @@ inline Joints back_substitute(const Elimination& el, const Right& right, const F
                               double theta_k, const double* vector) {
   const int k = el.k;
   Joints theta{};
-  const double theta_1 = ratio_angle(vector, false);
-  const double theta_2 = ratio_angle(vector, true);
-  theta[k] = theta_k, theta[k + 1] = theta_1, theta[k + 2] = theta_2;
-  const double b1[3] = {std::cos(theta_1), std::sin(theta_1), 1.0};
-  const double b2[3] = {std::cos(theta_2), std::sin(theta_2), 1.0};
+  // each angle's cosine and sine once: the products below and the frames use the same values
+  Joints cosine{}, sine{};
+  const auto set = [&](int j, double angle) {
+    theta[j] = angle, cosine[j] = std::cos(angle), sine[j] = std::sin(angle);
+  };
+  set(k, theta_k);
+  set(k + 1, ratio_angle(vector, false));
+  set(k + 2, ratio_angle(vector, true));
+  const double b1[3] = {cosine[k + 1], sine[k + 1], 1.0};
+  const double b2[3] = {cosine[k + 2], sine[k + 2], 1.0};
   Eigen::Matrix<double, kProducts, 1> x45;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) x45(3 * i + j) = b1[i] * b2[j];
   }
-  const Coefficients left = el.P[0] * std::cos(theta_k) + el.P[1] * std::sin(theta_k) + el.P[2];
+  const Coefficients left = el.P[0] * cosine[k] + el.P[1] * sine[k] + el.P[2];
   const Quantities rhs = left * x45 - right.r;
   int first = -1, second = -1;
   for (int j = 0; j < kDof; ++j) {
     if (j < k || j > k + 3) (first < 0 ? first : second) = j;
   }
   const auto [a, b] = right_joints(right, rhs);
-  theta[first] = a, theta[second] = b;
+  set(first, a);
+  set(second, b);
   const int dropped = k + 3;
   Frame pre, post;
-  for (int j = 0; j < dropped; ++j) pre = pre * dh_frame(theta[j], el.rows[j]);
-  for (int j = dropped + 1; j < kDof; ++j) post = post * dh_frame(theta[j], el.rows[j]);
+  for (int j = 0; j < dropped; ++j) pre = pre * dh_frame(cosine[j], sine[j], el.rows[j]);
+  for (int j = dropped + 1; j < kDof; ++j) post = post * dh_frame(cosine[j], sine[j], el.rows[j]);
   const Frame A = inverse(pre) * H * inverse(post);
   theta[dropped] = std::atan2(A.R[1][0], A.R[0][0]);
   return el.joint_values(theta);

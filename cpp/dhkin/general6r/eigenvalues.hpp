@@ -24,20 +24,31 @@ constexpr double kRadix = 2.0;
 // A row and column pair is rescaled when that shrinks their combined norm below this fraction.
 constexpr double kBalanceGain = 0.95;
 
-// K (its leading n x n block) balanced in place by a diagonal similarity D^-1 K D (Parlett and
-// Reinsch, as LAPACK's dgebal, which dgeev runs first): each row and its column brought to
-// comparable norms by powers of two. The eigenvalues are K's; their computed accuracy is not:
-// the companion of a badly scaled M(x) unbalanced lost two real roots 5.5e-11 apart (a CRX-10iA
-// pose at a joint limit) into one complex pair, balanced it keeps them apart.
-inline void balance(Matrix24& K, int n) {
+// The companion K = [[0, I], [X, Y]] (24 x 24) balanced in place by a diagonal similarity
+// D^-1 K D (Parlett and Reinsch, as LAPACK's dgebal, which dgeev runs first): each row and its
+// column brought to comparable norms by powers of two. The eigenvalues are K's; their computed
+// accuracy is not: the companion of a badly scaled M(x) unbalanced lost two real roots 5.5e-11
+// apart (a CRX-10iA pose at a joint limit) into one complex pair, balanced it keeps them apart.
+// A diagonal similarity keeps K's zero blocks zero, so the norms skip them: row i < 12 holds
+// only K(i, 12 + i), column i < 12 only rows 12 ..; column i >= 12 row i - 12 and rows 12 ..
+// (each sum in the order of the whole row or column: adding zeros is exact, the same bits).
+inline void balance_companion(Matrix24& K) {
+  constexpr int n = kEigenvalues, half = kMonomials;
   for (bool done = false; !done;) {
     done = true;
     for (int i = 0; i < n; ++i) {
       double column = 0.0, row = 0.0;
-      for (int j = 0; j < n; ++j) {
-        if (j == i) continue;
-        column += std::abs(K(j, i));
-        row += std::abs(K(i, j));
+      if (i < half) {
+        for (int j = half; j < n; ++j) column += std::abs(K(j, i));
+        row = std::abs(K(i, half + i));
+      } else {
+        column = std::abs(K(i - half, i));
+        for (int j = half; j < n; ++j) {
+          if (j != i) column += std::abs(K(j, i));
+        }
+        for (int j = 0; j < n; ++j) {
+          if (j != i) row += std::abs(K(i, j));
+        }
       }
       if (column == 0.0 || row == 0.0) continue;
       const double total = column + row;
@@ -55,12 +66,12 @@ inline void balance(Matrix24& K, int n) {
 
 }  // namespace eigenvalues_detail
 
-// The eigenvalues of K's leading n x n block (balanced in place first, then destroyed) into
-// out(0 .. n-1); false where the QR iteration does not converge.
-inline bool matrix_eigenvalues(Matrix24& K, int n, Eigenvalues& out) {
-  eigenvalues_detail::balance(K, n);
-  reduce_to_hessenberg(K, n);
-  return hessenberg_eigenvalues(K, n, out);
+// The eigenvalues of the companion K (balanced in place first, then destroyed) into out; false
+// where the QR iteration does not converge.
+inline bool matrix_eigenvalues(Matrix24& K, Eigenvalues& out) {
+  eigenvalues_detail::balance_companion(K);
+  reduce_to_hessenberg(K, kEigenvalues);
+  return hessenberg_eigenvalues(K, kEigenvalues, out);
 }
 
 // The eigenvalues of the companion of M(x) = A x^2 + B x + C (A_inverse = A^-1) into out; false
@@ -75,7 +86,7 @@ inline bool companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, 
   K.topRightCorner<kMonomials, kMonomials>().setIdentity();
   K.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
   K.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
-  return matrix_eigenvalues(K, kEigenvalues, out);
+  return matrix_eigenvalues(K, out);
 }
 
 // The eigenvalues of the pencil L - x R (an infinite one, beta = 0, as infinity); false where QZ

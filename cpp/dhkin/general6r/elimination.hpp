@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include "dhkin/chain.hpp"
@@ -35,20 +36,30 @@ using Vector12 = Eigen::Matrix<double, kMonomials, 1>;
 // The equations of one side, over the products of the two joints after the eliminated one.
 using Coefficients = Eigen::Matrix<double, kQuantities, kProducts>;
 
-// One standard-DH row (the lengths in units of the model's scale).
+// One standard-DH row (the lengths in units of the model's scale), with the cosine and sine of
+// its twist computed once (back-substitution builds five frames per start).
 struct DHRow {
   double d = 0.0, a = 0.0, alpha = 0.0;
+  double cos_alpha = 1.0, sin_alpha = 0.0;
+
+  DHRow() = default;
+  DHRow(double d_, double a_, double alpha_)
+      : d(d_), a(a_), alpha(alpha_), cos_alpha(std::cos(alpha_)), sin_alpha(std::sin(alpha_)) {}
 };
 
-// Rz(theta) Tz(d) Tx(a) Rx(alpha).
-inline Frame dh_frame(double theta, const DHRow& row) {
-  const double ct = std::cos(theta), st = std::sin(theta);
-  const double ca = std::cos(row.alpha), sa = std::sin(row.alpha);
+// Rz(theta) Tz(d) Tx(a) Rx(alpha) from theta's cosine ct and sine st.
+inline Frame dh_frame(double ct, double st, const DHRow& row) {
+  const double ca = row.cos_alpha, sa = row.sin_alpha;
   Frame out;
   out.R[0][0] = ct, out.R[0][1] = -st * ca, out.R[0][2] = st * sa, out.p[0] = row.a * ct;
   out.R[1][0] = st, out.R[1][1] = ct * ca, out.R[1][2] = -ct * sa, out.p[1] = row.a * st;
   out.R[2][0] = 0.0, out.R[2][1] = sa, out.R[2][2] = ca, out.p[2] = row.d;
   return out;
+}
+
+// Rz(theta) Tz(d) Tx(a) Rx(alpha).
+inline Frame dh_frame(double theta, const DHRow& row) {
+  return dh_frame(std::cos(theta), std::sin(theta), row);
 }
 
 struct Elimination {

@@ -52,7 +52,25 @@ def test_the_batched_run_gives_the_pose_by_pose_report(name: str, reference: str
     assert figures(batched) == figures(by_pose)
 
 
-class FaultyRobot(dhkin.Robot):
+def valid_rows_first(batch: Any, q: np.ndarray, valid: np.ndarray) -> Any:
+    """``batch`` with the rows ``q`` and flags ``valid``, each pose's valid rows first in their
+    order (as the IK's own batches are)."""
+    order = np.argsort(~valid, axis=1, kind="stable")
+    return replace(batch, q=np.take_along_axis(q, order[..., None], axis=1),
+                   valid=np.take_along_axis(valid, order, axis=1))
+
+
+class SinglePoseFromBatch(dhkin.Robot):
+    """A robot whose ``ik`` is its ``ik_batch_detailed`` on one pose (faults made there show in
+    both runs)."""
+
+    def ik(self, T: Any, q_seed: Any = None, *args: Any, **kwargs: Any) -> Any:
+        seed = None if q_seed is None else np.asarray(q_seed)[None]
+        batch = self.ik_batch_detailed(np.asarray(T)[None], seed)
+        return IKSolutions(q=batch.q[0][batch.valid[0]])
+
+
+class FaultyRobot(SinglePoseFromBatch):
     """UR5 whose IK answers, batch and pose by pose alike, depend on a hash of the seed: some
     poses get nothing (unsolved), a shifted solution or a NaN (wrong), or lose the solution
     nearest the seed (missing); a seed with joint 5 about 0.05 rad from 0 (a perturbed seed of
@@ -75,14 +93,7 @@ class FaultyRobot(dhkin.Robot):
                 q[k, rows[-1], 3] = np.nan
             elif kind % 13 == 3 and len(rows):
                 valid[k, rows[np.argmin(np.abs(q[k, rows] - seed).max(axis=1))]] = False
-        order = np.argsort(~valid, axis=1, kind="stable")  # valid rows first, in their order
-        return replace(batch, q=np.take_along_axis(q, order[..., None], axis=1),
-                       valid=np.take_along_axis(valid, order, axis=1))
-
-    def ik(self, T: Any, q_seed: Any = None, *args: Any, **kwargs: Any) -> Any:
-        seed = None if q_seed is None else np.asarray(q_seed)[None]
-        batch = self.ik_batch_detailed(np.asarray(T)[None], seed)
-        return IKSolutions(q=batch.q[0][batch.valid[0]])
+        return valid_rows_first(batch, q, valid)
 
 
 def test_a_faulty_ik_fails_both_runs_sample_for_sample() -> None:
@@ -95,7 +106,7 @@ def test_a_faulty_ik_fails_both_runs_sample_for_sample() -> None:
     assert not batched.ok and figures(batched) == figures(by_pose)
 
 
-class FaultyGeneral6R(dhkin.Robot):
+class FaultyGeneral6R(SinglePoseFromBatch):
     """xArm6 (general 6R solver) whose unseeded answers, batch and pose by pose alike, depend on
     a hash of the target: some poses get nothing (unsolved), one root shifted (wrong), or lose
     their first root (the sampled q's, else a root the multistart reference finds: missing or
@@ -115,14 +126,7 @@ class FaultyGeneral6R(dhkin.Robot):
                 q[k, rows[0], 2] += 1e-6
             elif kind % 11 in (2, 3, 4) and len(rows) > 1:
                 valid[k, rows[0]] = False
-        order = np.argsort(~valid, axis=1, kind="stable")  # valid rows first, in their order
-        return replace(batch, q=np.take_along_axis(q, order[..., None], axis=1),
-                       valid=np.take_along_axis(valid, order, axis=1))
-
-    def ik(self, T: Any, q_seed: Any = None, *args: Any, **kwargs: Any) -> Any:
-        seed = None if q_seed is None else np.asarray(q_seed)[None]
-        batch = self.ik_batch_detailed(np.asarray(T)[None], seed)
-        return IKSolutions(q=batch.q[0][batch.valid[0]])
+        return valid_rows_first(batch, q, valid)
 
 
 def test_a_faulty_general_6r_ik_fails_both_runs_sample_for_sample() -> None:

@@ -87,15 +87,13 @@ inline bool at_rounding(const PoseError& e, double goal, double lever) {
 // rounding), q is left as it was: refine() takes it from the start, as it did before.
 inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, const Frame& target,
                                Joints& q, double goal, double lever) {
-  const auto at_rounding = [&](const PoseError& e) {
-    return general6r::at_rounding(e, goal, lever);
-  };
+  const auto done = [&](const PoseError& e) { return at_rounding(e, goal, lever); };
   FullStepRoot out;
   Evaluation now, trial;
   Joints current = q;
   evaluate(chain, shape, current, target, now);
   Jacobian J;
-  for (int step = 0; step < kFullSteps && !at_rounding(now.error); ++step) {
+  for (int step = 0; step < kFullSteps && !done(now.error); ++step) {
     jacobian(chain, now.frames.data(), J.data());
     const Eigen::Matrix<double, kDof, 1> dq = J.partialPivLu().solve(now.e);
     Joints next;
@@ -108,7 +106,7 @@ inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, cons
     current = next;
     std::swap(now, trial);
   }
-  if (!at_rounding(now.error)) return out;
+  if (!done(now.error)) return out;
   jacobian(chain, now.frames.data(), J.data());
   J.topRows<3>() /= lever;
   out.converged = true;

@@ -43,19 +43,54 @@ struct BatchReport {
 
 namespace batch {
 
-// to[j] = from[j * kLanes] for the kDof joints: one joint vector out of a by-joint, by-lane array.
-// The output arrays are fresh memory, where stores cost most: with AVX-512 the joint vector is
-// gathered and written by one masked store.
-DHKIN_INLINE void put_joints(double* to, const double* from) {
+// rows[l][j] = v[j] lane l, for the kDof joint vectors v (rows[l][j] for j >= kDof is left
+// undefined): one joint vector per lane out of a by-joint array of lanes, for the output slots.
+// The output arrays take each joint vector by one (masked) store of a row; with AVX-512 the
+// rows come from an 8 x 8 transposition in registers (24 two-register permutations), which
+// costs a fraction of eight gathers of six values (the lanes' eight joint vectors).
+DHKIN_INLINE void joint_rows(const Lanes (&v)[kDof], double (*rows)[kLanes]) {
+#if defined(__AVX512F__)
+  static_assert(kDof <= 8 && simd::kParts == 1, "one vector");
+  __m512d r[8];
+  for (int j = 0; j < 8; ++j) r[j] = j < kDof ? (__m512d)v[j].v[0] : _mm512_setzero_pd();
+  // pairs of rows interleaved, then pairs of pairs, then halves: row l of the result is lane
+  // l of every input
+  __m512d t[8], u[8];
+  for (int k = 0; k < 4; ++k) {
+    t[2 * k] = _mm512_unpacklo_pd(r[2 * k], r[2 * k + 1]);      // r0[0] r1[0] r0[2] r1[2] ...
+    t[2 * k + 1] = _mm512_unpackhi_pd(r[2 * k], r[2 * k + 1]);  // r0[1] r1[1] r0[3] r1[3] ...
+  }
+  const __m512i low_pairs = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
+  const __m512i high_pairs = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+  for (int h = 0; h < 2; ++h) {  // rows 0-3 (h = 0) and 4-7
+    u[4 * h + 0] = _mm512_permutex2var_pd(t[4 * h], low_pairs, t[4 * h + 2]);       // lanes 0, 4
+    u[4 * h + 2] = _mm512_permutex2var_pd(t[4 * h], high_pairs, t[4 * h + 2]);      // lanes 2, 6
+    u[4 * h + 1] = _mm512_permutex2var_pd(t[4 * h + 1], low_pairs, t[4 * h + 3]);   // lanes 1, 5
+    u[4 * h + 3] = _mm512_permutex2var_pd(t[4 * h + 1], high_pairs, t[4 * h + 3]);  // lanes 3, 7
+  }
+  const __m512i low_half = _mm512_set_epi64(11, 10, 9, 8, 3, 2, 1, 0);
+  const __m512i high_half = _mm512_set_epi64(15, 14, 13, 12, 7, 6, 5, 4);
+  for (int l = 0; l < 4; ++l) {
+    _mm512_store_pd(rows[l], _mm512_permutex2var_pd(u[l], low_half, u[4 + l]));
+    _mm512_store_pd(rows[4 + l], _mm512_permutex2var_pd(u[l], high_half, u[4 + l]));
+  }
+#else
+  for (int j = 0; j < kDof; ++j) {
+    alignas(64) double values[kLanes];
+    v[j].store(values);
+    for (int l = 0; l < kLanes; ++l) rows[l][j] = values[l];
+  }
+#endif
+}
+
+// to[j] = row[j] for the kDof joints (row: 64-byte aligned, kLanes values).
+DHKIN_INLINE void put_joints(double* to, const double* row) {
 #if defined(__AVX512F__)
   static_assert(kDof <= 8, "one vector");
-  const __m512i index = _mm512_set_epi64(0, 0, 5 * kLanes, 4 * kLanes, 3 * kLanes, 2 * kLanes,
-                                         kLanes, 0);
   const __mmask8 joints = static_cast<__mmask8>((1u << kDof) - 1);
-  const __m512d values = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), joints, index, from, 8);
-  _mm512_mask_storeu_pd(to, joints, values);
+  _mm512_mask_storeu_pd(to, joints, _mm512_load_pd(row));
 #else
-  for (int j = 0; j < kDof; ++j) to[j] = from[j * kLanes];
+  for (int j = 0; j < kDof; ++j) to[j] = row[j];
 #endif
 }
 
@@ -79,7 +114,7 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
   tolerance = plan.verification_tolerance(tolerance);
   // by branch, then lane: the copies, whether each exists and must be verified again, the
   // branch's errors and flags
-  alignas(64) double q[kBranches][kDof][kLanes];
+  alignas(64) double q[kBranches][kLanes][kLanes];  // [b][l]: lane l's joint vector (joint_rows)
   alignas(64) double position[kBranches][kLanes], rotation[kBranches][kLanes];
   alignas(64) std::int64_t exists[kBranches][kLanes], recheck[kBranches][kLanes];
   alignas(64) std::int64_t flags[kBranches][kLanes];
@@ -95,6 +130,7 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
       continue;
     }
     Mask clipped = every_lane<Lanes>(false);
+    Lanes copies[kDof];
     for (int j = 0; j < kDof; ++j) {
       const bool revolute = plan.revolute(j);
       const Lanes value = answer.q[b][j];
@@ -103,8 +139,9 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
       found = found && nearest.exists;
       const Lanes copy = placed(plan.limits[j], revolute, value, nearest.turn);
       clipped = clipped || copy != shifted(revolute, value, nearest.turn);
-      copy.store(q[b][j]);
+      copies[j] = copy;
     }
+    joint_rows(copies, q[b]);
     const Mask again = clipped || answer.errors[b].largest() > tolerance - kCopyMargin;
     std::memcpy(exists[b], &found.v, sizeof exists[b]);
     std::memcpy(recheck[b], &again.v, sizeof recheck[b]);
@@ -128,7 +165,7 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
     for (int b = 0; b < kBranches; ++b) {
       const bool exists_b = exists[b][l] != 0;
       double* const q_slot = q_out + slot * kDof;
-      put_joints(q_slot, &q[b][0][l]);
+      put_joints(q_slot, q[b][l]);
       PoseError error{position[b][l], rotation[b][l]};
       bool kept = exists_b;
       if ((exists[b][l] & recheck[b][l]) != 0) {  // rare: no branch on exists_b alone

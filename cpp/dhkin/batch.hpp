@@ -21,8 +21,9 @@
 namespace dhkin {
 
 // The caller's arrays for N poses: q (N, kBranches, kDof), valid, branch, flags (N, kBranches),
-// errors (N, kBranches, 2), projection and dropped (N). The caller gives every slot its empty
-// values (zeros, and branch -1); a pose leaves the slots it does not fill with those values.
+// errors (N, kBranches, 2), projection and dropped (N), uninitialised: every slot of a pose that
+// is answered is written, those past its last solution with the empty values (zeros, valid
+// false, branch -1). A rejected pose and those after it are not written (the batch stops).
 struct NearestOutputs {
   double* q;
   bool* valid;
@@ -94,6 +95,19 @@ DHKIN_INLINE void put_joints(double* to, const double* row) {
 #endif
 }
 
+// Slots [slot, kBranches) of pose i get the empty values.
+inline void put_empty(const NearestOutputs& out, std::size_t i, int slot) {
+  for (std::size_t k = i * kBranches + static_cast<std::size_t>(slot); k < (i + 1) * kBranches;
+       ++k) {
+    for (int j = 0; j < kDof; ++j) out.q[k * kDof + j] = 0.0;
+    out.valid[k] = false;
+    out.branch[k] = -1;
+    out.flags[k] = 0;
+    out.errors[2 * k] = 0.0;
+    out.errors[2 * k + 1] = 0.0;
+  }
+}
+
 // Slot `slot` of pose i gets `solution`.
 inline void put(const NearestOutputs& out, std::size_t i, int slot, const Solution& solution) {
   const std::size_t k = i * kBranches + static_cast<std::size_t>(slot);
@@ -151,9 +165,8 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
   }
   // pose by pose: each solution written straight into its slot; a branch without a copy is
   // written too and then overwritten by the next one (its slot does not advance), so the loop
-  // does not branch on which copies exist (they vary from pose to pose). The slot past the last
-  // solution is given back its empty values (the caller's zeros, branch -1) where it was
-  // written over.
+  // does not branch on which copies exist (they vary from pose to pose). The slots past the
+  // last solution get the empty values.
   for (int l = 0; l < count; ++l) {
     if (!answer.answered[l]) continue;
     const std::size_t i = first + static_cast<std::size_t>(l);
@@ -161,7 +174,6 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
     double* const q_out = out.q + row * kDof;
     double* const errors_out = out.errors + 2 * row;
     int slot = 0;
-    bool spoiled = false;  // slot `slot` holds a branch without a copy
     for (int b = 0; b < kBranches; ++b) {
       const bool exists_b = exists[b][l] != 0;
       double* const q_slot = q_out + slot * kDof;
@@ -177,17 +189,9 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
       out.flags[row + slot] = static_cast<std::uint8_t>(flags[b][l]);
       errors_out[2 * slot] = error.position;
       errors_out[2 * slot + 1] = error.rotation;
-      spoiled = !kept;
       slot += kept ? 1 : 0;
     }
-    if (spoiled && slot < kBranches) {
-      for (int j = 0; j < kDof; ++j) q_out[slot * kDof + j] = 0.0;
-      out.valid[row + slot] = false;
-      out.branch[row + slot] = -1;
-      out.flags[row + slot] = 0;
-      errors_out[2 * slot] = 0.0;
-      errors_out[2 * slot + 1] = 0.0;
-    }
+    if (slot < kBranches) put_empty(out, i, slot);
     out.projection[i] = answer.projection[l];
     out.dropped[i] = 0;
     report.width = std::max(report.width, slot);
@@ -206,6 +210,7 @@ inline void put_pipeline(const Plan& plan, const TargetFrames& frames, const dou
     put(out, i, slot++, solution);
     return true;
   });
+  put_empty(out, i, slot);
   out.projection[i] = info.projection;
   out.dropped[i] = info.dropped;
   report.width = std::max(report.width, slot);

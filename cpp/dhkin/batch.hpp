@@ -84,27 +84,55 @@ DHKIN_INLINE void joint_rows(const Lanes (&v)[kDof], double (*rows)[kLanes]) {
 #endif
 }
 
-// to[j] = row[j] for the kDof joints (row: 64-byte aligned, kLanes values).
-DHKIN_INLINE void put_joints(double* to, const double* row) {
-#if defined(__AVX512F__)
-  static_assert(kDof <= 8, "one vector");
-  const __mmask8 joints = static_cast<__mmask8>((1u << kDof) - 1);
-  _mm512_mask_storeu_pd(to, joints, _mm512_load_pd(row));
+// Stores into the result arrays that bypass the caches (SSE2 non-temporal stores, 16 bytes each,
+// to 16-byte aligned addresses): the arrays of a batch exceed the caches, and an ordinary store
+// first reads its line from memory, which stalled the loop that writes the slots (perf: the
+// store after each slot's joint values). Every answered pose's q row (384 bytes) and errors
+// (128 bytes) are written whole (solutions, then empty slots), so the lines fill in the write-
+// combining buffers. solve_nearest ends with a store fence.
+#if defined(__SSE2__)
+constexpr bool kStreamed = true;
+DHKIN_INLINE void stream_pair(double* to, double a, double b) {
+  _mm_stream_pd(to, _mm_set_pd(b, a));
+}
+DHKIN_INLINE void stream_fence() { _mm_sfence(); }
 #else
-  for (int j = 0; j < kDof; ++j) to[j] = row[j];
+constexpr bool kStreamed = false;
+DHKIN_INLINE void stream_pair(double* to, double a, double b) { to[0] = a, to[1] = b; }
+DHKIN_INLINE void stream_fence() {}
 #endif
+
+// Whether the output arrays take stream_pair (16-byte aligned: numpy's arrays are).
+inline bool streamable(const NearestOutputs& out) {
+  const auto aligned = [](const void* p) { return reinterpret_cast<std::uintptr_t>(p) % 16 == 0; };
+  return kStreamed && aligned(out.q) && aligned(out.errors);
 }
 
-// Slots [slot, kBranches) of pose i get the empty values.
-inline void put_empty(const NearestOutputs& out, std::size_t i, int slot) {
+// to[j] = row[j] for the kDof joints (row: 16-byte aligned, kLanes values), streamed or not.
+DHKIN_INLINE void put_joints(double* to, const double* row, bool streamed) {
+  static_assert(kDof % 2 == 0, "pairs");
+  if (streamed) {
+    for (int j = 0; j < kDof; j += 2) stream_pair(to + j, row[j], row[j + 1]);
+  } else {
+    for (int j = 0; j < kDof; ++j) to[j] = row[j];
+  }
+}
+
+// Slots [slot, kBranches) of pose i get the empty values (q and errors streamed or not).
+inline void put_empty(const NearestOutputs& out, std::size_t i, int slot, bool streamed = false) {
+  alignas(16) static const double kZeros[kDof] = {};
   for (std::size_t k = i * kBranches + static_cast<std::size_t>(slot); k < (i + 1) * kBranches;
        ++k) {
-    for (int j = 0; j < kDof; ++j) out.q[k * kDof + j] = 0.0;
+    put_joints(out.q + k * kDof, kZeros, streamed);
     out.valid[k] = false;
     out.branch[k] = -1;
     out.flags[k] = 0;
-    out.errors[2 * k] = 0.0;
-    out.errors[2 * k + 1] = 0.0;
+    if (streamed) {
+      stream_pair(out.errors + 2 * k, 0.0, 0.0);
+    } else {
+      out.errors[2 * k] = 0.0;
+      out.errors[2 * k + 1] = 0.0;
+    }
   }
 }
 
@@ -167,6 +195,7 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
   // written too and then overwritten by the next one (its slot does not advance), so the loop
   // does not branch on which copies exist (they vary from pose to pose). The slots past the
   // last solution get the empty values.
+  const bool streamed = streamable(out);
   for (int l = 0; l < count; ++l) {
     if (!answer.answered[l]) continue;
     const std::size_t i = first + static_cast<std::size_t>(l);
@@ -177,21 +206,25 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
     for (int b = 0; b < kBranches; ++b) {
       const bool exists_b = exists[b][l] != 0;
       double* const q_slot = q_out + slot * kDof;
-      put_joints(q_slot, q[b][l]);
+      put_joints(q_slot, q[b][l], streamed);
       PoseError error{position[b][l], rotation[b][l]};
       bool kept = exists_b;
       if ((exists[b][l] & recheck[b][l]) != 0) {  // rare: no branch on exists_b alone
-        error = check(plan.chain, q_slot, lane(answer.T_at, l));
+        error = check(plan.chain, q[b][l], lane(answer.T_at, l));
         kept = error.within(tolerance);
       }
       out.valid[row + slot] = true;
       out.branch[row + slot] = static_cast<std::int16_t>(b);
       out.flags[row + slot] = static_cast<std::uint8_t>(flags[b][l]);
-      errors_out[2 * slot] = error.position;
-      errors_out[2 * slot + 1] = error.rotation;
+      if (streamed) {
+        stream_pair(errors_out + 2 * slot, error.position, error.rotation);
+      } else {
+        errors_out[2 * slot] = error.position;
+        errors_out[2 * slot + 1] = error.rotation;
+      }
       slot += kept ? 1 : 0;
     }
-    if (slot < kBranches) put_empty(out, i, slot);
+    if (slot < kBranches) put_empty(out, i, slot, streamed);
     out.projection[i] = answer.projection[l];
     out.dropped[i] = 0;
     report.width = std::max(report.width, slot);
@@ -259,11 +292,13 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
       if (status != kUsable) {
         report.rejected = static_cast<long>(i);
         report.status = status;
+        batch::stream_fence();
         return report;
       }
       batch::put_pipeline(plan, frames, T + 16 * i, seed, tolerance, out, i, report);
     }
   }
+  batch::stream_fence();
   return report;
 }
 

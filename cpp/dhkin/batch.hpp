@@ -45,10 +45,9 @@ struct BatchReport {
 namespace batch {
 
 // rows[l][j] = v[j] lane l, for the kDof joint vectors v (rows[l][j] for j >= kDof is left
-// undefined): one joint vector per lane out of a by-joint array of lanes, for the output slots.
-// The output arrays take each joint vector by one (masked) store of a row; with AVX-512 the
-// rows come from an 8 x 8 transposition in registers (24 two-register permutations), which
-// costs a fraction of eight gathers of six values (the lanes' eight joint vectors).
+// undefined): one joint vector per lane out of a by-joint array of lanes, for the output slots
+// (put_joints copies a row). With AVX-512 the rows come from an 8 x 8 transposition in
+// registers (24 two-register permutations) in place of a gather per slot.
 DHKIN_INLINE void joint_rows(const Lanes (&v)[kDof], double (*rows)[kLanes]) {
 #if defined(__AVX512F__)
   static_assert(kDof <= 8 && simd::kParts == 1, "one vector");

@@ -291,8 +291,9 @@ class ClosedFormSolver:
         N, B = targets.shape[0], self.n_branches
         # uninitialised: the core writes every slot of each pose (empty values past its last
         # solution), and a rejected pose raises below
-        out = (np.empty((N, B, self.dof)), np.empty((N, B), np.bool_), np.empty((N, B), np.int16),
-               np.empty((N, B), np.uint8), np.empty((N, B, 2)))
+        out: tuple[NDArray[Any], ...] = (
+            np.empty((N, B, self.dof)), np.empty((N, B), np.bool_), np.empty((N, B), np.int16),
+            np.empty((N, B), np.uint8), np.empty((N, B, 2)))
         projection, dropped = np.empty(N), np.empty(N, np.int64)
         reports: list[tuple[int, int, int, int]] = []
 

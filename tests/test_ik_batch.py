@@ -95,10 +95,7 @@ def test_ik_batch_equals_ik_pose_by_pose(robot, copies):
     assert not batch.valid[-5:].any()  # the unreachable ones
 
 
-def test_the_core_writes_every_slot_of_a_batch_without_copies(robot):
-    """ik_batch without copies hands the core uninitialised arrays: every slot of every pose,
-    the empty ones too, comes back as when the arrays start out filled with other values."""
-    T, seeds = pose_set(robot, 120, seed=8)
+def _every_slot_written(robot: dhkin.Robot, T: np.ndarray, seeds: np.ndarray) -> None:
     reference = robot.ik_batch_detailed(T, seeds)
     solver = robot.ik_solver
     N, B, n = len(T), solver.n_branches, robot.dof
@@ -115,6 +112,23 @@ def test_the_core_writes_every_slot_of_a_batch_without_copies(robot):
         np.testing.assert_array_equal(got[:, width:], np.full_like(got[:, width:], empty))
     np.testing.assert_array_equal(projection, reference.projection)
     np.testing.assert_array_equal(dropped, reference.dropped)
+
+
+def test_the_core_writes_every_slot_of_a_batch_without_copies(robot):
+    """ik_batch without copies hands the core uninitialised arrays: every slot of every pose,
+    the empty ones too, comes back as when the arrays start out filled with other values."""
+    _every_slot_written(robot, *pose_set(robot, 120, seed=8))
+
+
+@pytest.mark.parametrize("name", ["ur5", "abb_irb1200_7_70"])
+def test_every_slot_of_a_batch_larger_than_the_caches(load_robot, name):
+    """The same for a result beyond the second-level cache (10 MB), written by streaming
+    stores (cpp/dhkin/batch.hpp): random poses, a few out of reach."""
+    robot = load_robot(name)
+    rng = np.random.default_rng(9)
+    T = robot.fk(robot.table.random_q(20_000, rng))
+    T[::1000, :3, 3] += 100.0  # unreachable: every slot empty
+    _every_slot_written(robot, np.ascontiguousarray(T), robot.table.random_q(20_000, rng))
 
 
 @pytest.mark.parametrize("name", ["ur5", "abb_irb1200_7_70"])

@@ -13,6 +13,10 @@
 #include <cstdint>
 #include <cstring>
 
+#if defined(__unix__) || defined(__APPLE__)
+#include <unistd.h>
+#endif
+
 #include "dhkin/block.hpp"
 #include "dhkin/expand.hpp"
 #include "dhkin/pipeline.hpp"
@@ -101,10 +105,26 @@ DHKIN_INLINE void stream_pair(double* to, double a, double b) { to[0] = a, to[1]
 DHKIN_INLINE void stream_fence() {}
 #endif
 
-// Whether the output arrays take stream_pair (16-byte aligned: numpy's arrays are).
-inline bool streamable(const NearestOutputs& out) {
+// The size of this core's second-level cache in bytes (the operating system's figure; where it
+// gives none, 1 MiB, a common size).
+inline std::size_t level2_cache_bytes() {
+  static const std::size_t bytes = [] {
+    long size = -1;
+#if defined(_SC_LEVEL2_CACHE_SIZE)
+    size = sysconf(_SC_LEVEL2_CACHE_SIZE);
+#endif
+    return size > 0 ? static_cast<std::size_t>(size) : std::size_t{1} << 20;
+  }();
+  return bytes;
+}
+
+// Whether a call writing n poses streams its q rows and errors: when these exceed the
+// second-level cache (a smaller result stays in the caches for its reader, and is written
+// there), and the arrays take stream_pair (16-byte aligned: numpy's arrays are).
+inline bool streamable(const NearestOutputs& out, std::size_t n) {
   const auto aligned = [](const void* p) { return reinterpret_cast<std::uintptr_t>(p) % 16 == 0; };
-  return kStreamed && aligned(out.q) && aligned(out.errors);
+  const std::size_t bytes = n * kBranches * (kDof + 2) * sizeof(double);
+  return kStreamed && bytes > level2_cache_bytes() && aligned(out.q) && aligned(out.errors);
 }
 
 // to[j] = row[j] for the kDof joints (row: 16-byte aligned, kLanes values), streamed or not.
@@ -149,7 +169,7 @@ inline void put(const NearestOutputs& out, std::size_t i, int slot, const Soluti
 // The nearest copies of a block's answered poses (expand's copies = false, in lanes): slot by
 // slot into `out`, poses first + l.
 inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tolerance,
-                        const NearestOutputs& out, std::size_t first, int count,
+                        const NearestOutputs& out, std::size_t first, int count, bool streamed,
                         BatchReport& report) {
   const double slack = tolerance / plan.lever;
   tolerance = plan.verification_tolerance(tolerance);
@@ -194,7 +214,6 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
   // written too and then overwritten by the next one (its slot does not advance), so the loop
   // does not branch on which copies exist (they vary from pose to pose). The slots past the
   // last solution get the empty values.
-  const bool streamed = streamable(out);
   for (int l = 0; l < count; ++l) {
     if (!answer.answered[l]) continue;
     const std::size_t i = first + static_cast<std::size_t>(l);
@@ -267,6 +286,7 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
   BlockAnswer answer;
   CandidatesT<Lanes> found;
   KnownTurnsT<Lanes> known;
+  const bool streamed = batch::streamable(out, n);
   for (std::size_t first = 0; first < n; first += kLanes) {
     PoseBlock poses;
     poses.count = static_cast<int>(std::min<std::size_t>(kLanes, n - first));
@@ -276,7 +296,7 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
     }
     if (!plan.refine) {
       direct_block(plan, frames, poses, tolerance, answer, found, known);
-      batch::put_nearest(plan, answer, tolerance, out, first, poses.count, report);
+      batch::put_nearest(plan, answer, tolerance, out, first, poses.count, streamed, report);
     }
     for (int l = 0; l < poses.count; ++l) {
       if (!plan.refine && answer.answered[l]) continue;

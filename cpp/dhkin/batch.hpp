@@ -88,11 +88,11 @@ DHKIN_INLINE void joint_rows(const Lanes (&v)[kDof], double (*rows)[kLanes]) {
 }
 
 // Stores into the result arrays that bypass the caches (SSE2 non-temporal stores, 16 bytes each,
-// to 16-byte aligned addresses): the arrays of a batch exceed the caches, and an ordinary store
-// first reads its line from memory, which stalled the loop that writes the slots (perf: the
-// store after each slot's joint values). Every answered pose's q row (384 bytes) and errors
-// (128 bytes) are written whole (solutions, then empty slots), so the lines fill in the write-
-// combining buffers. solve_nearest ends with a store fence.
+// to 16-byte aligned addresses), for a batch whose result exceeds the caches (streamable): there
+// an ordinary store first reads its line from memory, which stalled the loop that writes the
+// slots (perf: the store after each slot's joint values). Every answered pose's q row (384
+// bytes) and errors (128 bytes) are written whole (solutions, then empty slots), so the lines
+// fill in the write-combining buffers. solve_nearest ends with a store fence.
 #if defined(__SSE2__)
 constexpr bool kStreamed = true;
 DHKIN_INLINE void stream_pair(double* to, double a, double b) {

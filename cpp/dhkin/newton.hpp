@@ -114,6 +114,16 @@ struct Settings {
   int budget = kBudget;       // chain evaluations
   double growth = kGrowth;    // kGrowth: Newton; kMonotone: a monotone descent
   double damping_start = 0.0;
+  // Stop at the first descent step (one that does not grow the error) that shrinks the squared
+  // error less than kPolishGain-fold, converged or not. For a problem whose least error need not
+  // be zero (a singular family's member with its free joint held), where that least error, or the
+  // point reaching it, is all that is wanted: Gauss-Newton's steps gain only linearly there, at a
+  // rate c^2 per step on the squared error (c: the residual times the curvature over the least
+  // singular value squared), so such a step leaves the squared error within c^2 / (1 - c^2) of
+  // itself above the least one. Near a root the steps gain quadratically (a double root's
+  // fourfold) and go on; a step that grows the error (Newton's first steps from millimetres
+  // away) goes on as without it.
+  bool stop_on_stall = false;
 };
 
 }  // namespace newton
@@ -176,7 +186,8 @@ inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, cons
       }
     }
     if (!taken) break;
-    if (polishing && !(trial_size * kPolishGain <= size)) {
+    const bool stalled = trial_size <= size && !(trial_size * kPolishGain <= size);
+    if ((polishing && !(trial_size * kPolishGain <= size)) || (settings.stop_on_stall && stalled)) {
       if (trial_size < best_size) best_error = trial_error, best_size = trial_size, best = trial;
       break;  // at the rounding of the arithmetic
     }

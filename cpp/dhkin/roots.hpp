@@ -141,13 +141,18 @@ constexpr int kValleyGrid = 16;
 // e.g. q = (-90, 90, -90, -90, 0, 0) deg: two roots 2.3e-4 rad apart on q6, sigma_min 7e-9) it
 // is quartic and a step gains a constant factor; four steps, stopping at the first that was not
 // lower, ended 4e-3 to 3e-2 rad off, where the released descent did not converge, so only the
-// seed found those roots. Twelve within the bracket reach 2e-5 to 1e-4.
+// seed found those roots. Twelve within the bracket reach 2e-5 to 1e-4. The steps stop earlier
+// once the middle's held member is a root by refinement's own convergence test.
 constexpr int kValleySteps = 12;
 
 namespace valley {
 
 // A member of branch b's family with the seed's free wrist joint at t, refined on the exact chain
-// with that joint held; its squared residual (infinite where the family has no member).
+// with that joint held; its squared residual (infinite where the family has no member). Away
+// from a root the held problem's least residual is not zero and Gauss-Newton gains only linearly
+// towards it: refinement stops at the first descent step that gains less than kPolishGain
+// (newton::Settings::stop_on_stall), which leaves the residual a small fraction above the least
+// one. Near a root the steps gain quadratically and polish it as before.
 struct Point {
   double t = 0.0, squared = INFINITY;
   Joints q{};
@@ -165,7 +170,7 @@ inline Point held_member(const Plan& plan, const Frame& T_dh, const Frame& T_at,
   point.q = found.q[b];
   plan.wrap_revolute(point.q);
   const double r = refine(plan.chain, T_at, point.q, plan.free_joints(kWrist), tolerance,
-                          {kPolishBudget, newton::kGrowth, 0.0})
+                          {kPolishBudget, newton::kGrowth, 0.0, true})
                        .largest();
   point.squared = r * r;
   return point;
@@ -199,7 +204,13 @@ inline void valley_roots(const Plan& plan, const Frame& T_dh, const Frame& T_at,
           right = grid[(k + 1) % kValleyGrid];
     if (!(middle.squared <= left.squared && middle.squared <= right.squared)) continue;
     left.t = middle.t - step, right.t = middle.t + step;  // the neighbours across the seam
-    for (int s = 0; s < kValleySteps && std::isfinite(left.squared + right.squared); ++s) {
+    // until the middle's held member is a root as refinement's convergence test takes one
+    // (both errors within newton::kRefineFraction of the tolerance: the release below then only
+    // polishes it) or the steps run out
+    const double converged = newton::kRefineFraction * tolerance;
+    for (int s = 0; s < kValleySteps && std::isfinite(left.squared + right.squared) &&
+                    !(middle.squared <= converged * converged);
+         ++s) {
       // the vertex of the parabola through the three points, kept inside the bracket
       const double a = (middle.t - left.t) * (middle.squared - right.squared);
       const double c = (middle.t - right.t) * (middle.squared - left.squared);

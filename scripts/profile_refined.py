@@ -10,8 +10,10 @@ mean and upper quantiles of the per-call time, the share of poses and of the tot
 10, 100 and 1000 us, and the same against the number of branches the ideal model solves (a pose
 whose ideal model misses branches has long shots: candidates clamped onto a reach boundary that
 the pipeline chases on the exact chain before it drops them, unless cpp/dhkin/reach_bound.hpp
-shows that the exact chain cannot reach them). The mean is what ``ik_batch``
-pays per pose; the median is the single-call figure of scripts/bench_ik.py.
+shows that the exact chain cannot reach them), and against the least |sin q5| among the
+solutions answered (near the wrist singular set the valley scans and seeded candidates run). The
+mean is what ``ik_batch`` pays per pose; the median is the single-call figure of
+scripts/bench_ik.py.
 """
 
 from __future__ import annotations
@@ -28,27 +30,36 @@ import dhkin
 ROBOTS = ("ur5e_calibrated", "tm5_900", "kinova_gen3_6dof")
 
 
-def call_times(robot: dhkin.Robot, poses: np.ndarray) -> np.ndarray:
-    """Per-call time (us) of robot.ik(T, copies=False) for each pose, after one warm-up pass."""
+#: Classes of poses by the least |sin q5| among the solutions answered: the wrist singular set's
+#: neighbourhood, where the valley scans and seeded candidates run, and the rest.
+WRIST_CLASSES = ((0.0, 0.05), (0.05, 0.2), (0.2, 1.01))
+
+
+def call_times(robot: dhkin.Robot, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-call time (us) of robot.ik(T, copies=False) for each pose, after one warm-up pass, and
+    the least |sin q5| among each pose's solutions (inf for none)."""
     for T in poses[:50]:
         robot.ik(T, copies=False)
     times = np.empty(len(poses))
+    wrist = np.full(len(poses), np.inf)
     gc.disable()
     try:
         for i, T in enumerate(poses):
             start = time.perf_counter_ns()
-            robot.ik(T, copies=False)
+            solutions = robot.ik(T, copies=False)
             times[i] = (time.perf_counter_ns() - start) / 1e3
+            if len(solutions):
+                wrist[i] = np.abs(np.sin(solutions.q[:, 4])).min()
     finally:
         gc.enable()
-    return times
+    return times, wrist
 
 
 def report(name: str, n: int) -> list[str]:
     robot = dhkin.load(name)
     q = robot.table.random_q(n, np.random.default_rng(25))
     poses = np.ascontiguousarray(robot.reference().fk(q))
-    times = call_times(robot, poses)
+    times, wrist = call_times(robot, poses)
     ideal = dhkin.Robot(robot.ik_solver.fit.ideal)
     ideal_branches = ideal.ik_batch_detailed(poses, copies=False, workers=1).valid.sum(axis=1)
     quantiles = np.quantile(times, [0.5, 0.9, 0.99])
@@ -65,6 +76,14 @@ def report(name: str, n: int) -> list[str]:
         group = ideal_branches == count
         lines.append(f"| {count} | {group.sum()} | {np.median(times[group]):.1f} | "
                      f"{times[group].mean():.1f} | {times[group].sum() / times.sum():.1%} |")
+    lines += ["", "| least \\|sin q5\\| answered | poses | median (us) | mean (us) "
+              "| share of time |", "|---|---:|---:|---:|---:|"]
+    for low, high in WRIST_CLASSES:
+        group = (wrist >= low) & (wrist < high)
+        if group.any():
+            lines.append(f"| [{low:g}, {min(high, 1.0):g}) | {group.sum()} | "
+                         f"{np.median(times[group]):.1f} | {times[group].mean():.1f} | "
+                         f"{times[group].sum() / times.sum():.1%} |")
     return [*lines, ""]
 
 

@@ -29,7 +29,10 @@ inline PoseError settle(const Plan& plan, const Frame& target, Joints& values, J
   if (plan.refine) {
     const Joints start = values;
     const int budget = long_shot ? kLongShotBudget : newton::kBudget;
-    PoseError error = refine(chain, target, values, fixed, tolerance, {budget, newton::kGrowth, 0.0});
+    // a long shot whose Newton stalls short of a root has reached the least error the exact chain
+    // has near it: not a root (newton::Settings::stop_on_stall)
+    PoseError error =
+        refine(chain, target, values, fixed, tolerance, {budget, newton::kGrowth, 0.0, long_shot});
     if (release && any(fixed) && !error.within(tolerance)) {
       // the exact chain is not singular here (its singular set is shifted, or a calibration
       // leaves none): the seed's choice of the free joint is not exact, so release it from where

@@ -116,8 +116,8 @@ struct Settings {
   double damping_start = 0.0;
   // Stop at the first descent step (one that does not grow the error) that shrinks the squared
   // error less than kPolishGain-fold, converged or not. For a problem whose least error need not
-  // be zero (a singular family's member with its free joint held), where that least error, or the
-  // point reaching it, is all that is wanted: Gauss-Newton's steps gain only linearly there, at a
+  // be zero (a singular family's member with its free joint held, a long shot beyond the ideal
+  // model's reach), where that least error, or the point reaching it, is all that is wanted: Gauss-Newton's steps gain only linearly there, at a
   // rate c^2 per step on the squared error (c: the residual times the curvature over the least
   // singular value squared), so such a step leaves the squared error within c^2 / (1 - c^2) of
   // itself above the least one. Near a root the steps gain quadratically (a double root's

@@ -197,6 +197,52 @@ struct Root {
   double sigma = 0.0;
 };
 
+// Newton's basin around a regular root (docs/general6r.md, "Speed, fifth pass"). Let F be the
+// error twist (linear rows over `lever`) and J the scaled geometric Jacobian that the steps solve
+// with. Along any unit joint direction u, d J / d u has columns
+// sum_k u_k d(col_i) / dq_k, each term a unit axis crossed into col_i's parts: |.| <= 1 for the
+// rotation rows and <= rho / lever for the linear ones, rho the largest distance of the end
+// point from a joint's axis (at most the sum of the chain's translations); so |J(a) - J(b)|_2 <=
+// |.|_F <= L |a - b| with L = 6 sqrt(1 + (rho / lever)^2) (times the joint directions' largest
+// squared size). F's own derivative differs from -J by the rotation error's inverse left
+// Jacobian minus I (at most the rotation angle, itself at most sqrt(6) |q - r|) times J's
+// rotation rows (|.| <= sqrt(6)): within 6 |q - r| of J. Newton's step from q at distance d
+// from a root r with sigma_min(J(r)) >= s then lands within (L + 6) d^2 / (2 (s - L d)) of r
+// (the textbook estimate with the mismatch folded into the constant): for d <= s / (2 (L + 6)),
+// at most d / 2, every step, converging quadratically. Such a start reaches r by full steps or
+// by refine() (Gauss-Newton as well, its damping at the floor and its steps far below
+// kMaxJointStep there), so settle() may count it as r at once. And no other root lies within
+// 2 s / (L + 6) of r, so the basins of distinct roots do not overlap.
+constexpr double kBasinFraction = 0.5;
+
+// The Lipschitz constant L + 6 above of `chain`'s scaled Jacobian (linear rows over `lever`).
+inline double newton_lipschitz(const Chain& chain, double lever) {
+  double reach = norm(chain.tail.translation());
+  double direction = 1.0;
+  for (const ChainJoint& joint : chain.joints) {
+    reach += norm(joint.before.translation());
+    direction = std::max(direction, std::abs(joint.direction));
+  }
+  const double ratio = reach / lever;
+  return (6.0 * std::sqrt(1.0 + ratio * ratio) + 6.0) * direction * direction;
+}
+
+// The root among `roots` in whose Newton basin (radius kBasinFraction sigma / lipschitz) q lies
+// (wrapped distance), or -1. A joint farther than the radius rules a root out at once.
+inline int basin_of(const Joints& q, const std::vector<Root>& roots, double lipschitz) {
+  const double fraction = kBasinFraction / lipschitz;
+  for (std::size_t index = 0; index < roots.size(); ++index) {
+    const double radius = fraction * roots[index].sigma;
+    double squared = 0.0;
+    for (int j = 0; j < kDof && squared < radius * radius; ++j) {
+      const double step = wrap(q[j] - roots[index].q[j]);
+      squared += step * step;
+    }
+    if (squared < radius * radius) return static_cast<int>(index);
+  }
+  return -1;
+}
+
 // Refine every start on the exact chain, keep those that verify at `tolerance`, merge those
 // that are one root. Only the elimination's starts are starts: the seed never is (it chooses
 // among the roots, it does not find them). A start of a real eigenvalue takes full Newton steps
@@ -226,7 +272,19 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     }
     return -1;
   };
+  const double lipschitz = newton_lipschitz(chain, lever);
   for (const Start& start : starts) {
+    const bool wants_probe = (start.origin & kShared) != 0 || moved_pose;
+    // a cluster's start in a known root's basin reaches that root (the cluster's other members
+    // split into the same roots' vectors; simple and paired starts were measured to lie in a
+    // known basin 0.03 times a pose, not worth the check)
+    if (start.origin == kShared) {
+      const int basin = basin_of(start.q, roots, lipschitz);
+      if (basin >= 0) {
+        probe[basin] = probe[basin] || wants_probe;
+        continue;
+      }
+    }
     Joints q = start.q;
     PoseError error;
     double sigma_bound = 0.0;  // at q, where full_steps() found it
@@ -252,7 +310,6 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     error = polish(chain, target, q, goal, error);
     finish(chain, shape, target, q, goal, lever, error, sigma_bound);
     q = wrapped(q);
-    const bool wants_probe = (start.origin & kShared) != 0 || moved_pose;
     const int duplicate = known(q);
     if (duplicate >= 0) {
       probe[duplicate] = probe[duplicate] || wants_probe;

@@ -23,6 +23,7 @@ from dhkin import _core
 from dhkin.errors import InputError
 from dhkin.ik.result import flag_names
 from dhkin.ik.workers import POSES_PER_WORKER
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 
 DATA = Path(__file__).resolve().parent / "data"
@@ -69,6 +70,11 @@ def test_ik_batch_equals_ik_pose_by_pose(robot, copies):
     Q, valid = robot.ik_batch(T, seeds, copies=copies)
     np.testing.assert_array_equal(Q, batch.q)
     np.testing.assert_array_equal(valid, batch.valid)
+    # each pose's solutions first, then its empty slots (zeros, branch -1)
+    assert not (np.diff(batch.valid.astype(int), axis=1) > 0).any()
+    empty = ~batch.valid
+    assert (batch.q[empty] == 0).all() and (batch.residuals[empty] == 0).all()
+    assert (batch.branch[empty] == -1).all() and (batch.flags[empty] == 0).all()
     for i in range(len(T)):
         solutions = robot.ik(T[i], seeds[i], copies=copies)
         keep = batch.valid[i]
@@ -87,6 +93,42 @@ def test_ik_batch_equals_ik_pose_by_pose(robot, copies):
         else:
             assert solutions.reason
     assert not batch.valid[-5:].any()  # the unreachable ones
+
+
+def _every_slot_written(robot: dhkin.Robot, T: np.ndarray, seeds: np.ndarray) -> None:
+    reference = robot.ik_batch_detailed(T, seeds)
+    solver = robot.ik_solver
+    N, B, n = len(T), solver.n_branches, robot.dof
+    out = (np.full((N, B, n), np.nan), np.ones((N, B), np.bool_), np.full((N, B), 7, np.int16),
+           np.full((N, B), 255, np.uint8), np.full((N, B, 2), np.nan))
+    projection, dropped = np.full(N, np.nan), np.full(N, -7, np.int64)
+    rejected, _, width = solver.core.nearest(T, seeds, DEFAULT_TOLERANCE, solver.frames, *out,
+                                             projection, dropped)
+    assert rejected == -1 and width == reference.q.shape[1]
+    for got, want in zip(out, (reference.q, reference.valid, reference.branch, reference.flags,
+                               reference.residuals), strict=True):
+        np.testing.assert_array_equal(got[:, :width], want)
+        empty = -1 if got.dtype == np.int16 else 0  # branch -1, every other value zero
+        np.testing.assert_array_equal(got[:, width:], np.full_like(got[:, width:], empty))
+    np.testing.assert_array_equal(projection, reference.projection)
+    np.testing.assert_array_equal(dropped, reference.dropped)
+
+
+def test_the_core_writes_every_slot_of_a_batch_without_copies(robot):
+    """ik_batch without copies hands the core uninitialised arrays: every slot of every pose,
+    the empty ones too, comes back as when the arrays start out filled with other values."""
+    _every_slot_written(robot, *pose_set(robot, 120, seed=8))
+
+
+@pytest.mark.parametrize("name", ["ur5", "abb_irb1200_7_70"])
+def test_every_slot_of_a_batch_larger_than_the_caches(load_robot, name):
+    """The same for a result beyond the second-level cache (10 MB), written by streaming
+    stores (cpp/dhkin/batch.hpp): random poses, a few out of reach."""
+    robot = load_robot(name)
+    rng = np.random.default_rng(9)
+    T = robot.fk(robot.table.random_q(20_000, rng))
+    T[::1000, :3, 3] += 100.0  # unreachable: every slot empty
+    _every_slot_written(robot, np.ascontiguousarray(T), robot.table.random_q(20_000, rng))
 
 
 @pytest.mark.parametrize("name", ["ur5", "abb_irb1200_7_70"])
@@ -231,6 +273,32 @@ def test_atan2_within_a_few_ulp_and_exact_at_zeros_and_infinities():
     _atan2_array(ys, xs, out)
     np.testing.assert_array_equal(out, np.arctan2(ys, xs))
     assert np.signbit(out).tolist() == np.signbit(np.arctan2(ys, xs)).tolist()
+
+
+def test_atan2_is_the_quotient_up_to_the_linear_bound():
+    """chain.hpp's rotation_angle takes s / c for atan2(s, c) where s <= 2^-27 c (c > 0, finite):
+    the same bits, on quotients spread over every binade below the bound, at the bound, and for
+    c over the whole range; just above the bound the polynomial's term does change some."""
+    bound = 2.0 ** -27
+    rng = np.random.default_rng(14)
+    n = 200_000
+    c = np.concatenate([rng.uniform(0.5, 1.0, n), 1.0 - rng.uniform(0, 1e-9, n),
+                        10.0 ** rng.uniform(-300, 300, n)])
+    ratio = np.concatenate([bound * 2.0 ** -rng.uniform(0, 60, 2 * n), bound * rng.uniform(
+        0.999, 1.0, n)])
+    s = ratio * c
+    s = np.concatenate([s, [0.0, 5e-324, bound * 0.75], bound * 2.0 ** -np.arange(0, 1000.0)])
+    c = np.concatenate([c, [1.0, 1.0, 0.75], np.ones(1000)])
+    below = s <= bound * c
+    assert below.mean() > 0.99
+    s, c = s[below], c[below]
+    out = np.empty(len(s))
+    _atan2_array(s, c, out)
+    assert np.array_equal(out.view(np.int64), (s / c).view(np.int64))
+    above = bound * rng.uniform(2.0, 8.0, n)
+    out = np.empty(n)
+    _atan2_array(above, np.ones(n), out)
+    assert not np.array_equal(out, above)
 
 
 def test_wrap_to_minus_pi_exclusive_pi_inclusive():

@@ -239,11 +239,16 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   }
   // one solution from two branches: the pipeline merges them (plan.same, for the lanes a cheaper
   // test does not find apart)
+  // (the joints in any order: the test is their conjunction. First the joint the two branches'
+  // highest differing index bit solves for, where they lie apart in nearly every lane: q1 for
+  // the shoulder, q3 for the elbow, q5 for the wrist)
   const double merge_distance = 2.0 * kMergeAngle;
   for (int a = 0; a < kBranches; ++a) {
     for (int b = a + 1; b < kBranches; ++b) {
       Mask maybe = out.ok[a] && out.ok[b] && !declined;
-      for (int j = 0; j < kDof && any(maybe); ++j) {
+      const int first = kSplitJoint[a ^ b];
+      for (int k = 0; k < kDof && any(maybe); ++k) {
+        const int j = k == 0 ? first : (k <= first ? k - 1 : k);
         maybe = maybe && !block::surely_apart(out.q[a][j], out.q[b][j], plan.revolute(j),
                                               merge_distance);
       }

@@ -216,6 +216,20 @@ inline PoseError lane(const PoseErrorT<Lanes>& e, int l) {
   return {lane(e.position, l), lane(e.rotation, l)};
 }
 
+// Below this ratio s / c (s >= 0, c > 0) atan2(s, c) is s / c bit for bit (see rotation_angle).
+constexpr double kLinearAtan = 0x1p-27;
+
+// atan2(s, c) for s >= 0 (NaN allowed), the same bits, with the quotient alone where every lane
+// has s <= 2^-27 c (c finite and > 0): there atan2 (angles.hpp) reduces to t = s / c, table entry 0
+// and u = (t - 0) / (1 + t 0) = t, and returns 0 + (u + u^3 P(u^2)) with |u^3 P| < |u| 2^-54 / 3,
+// less than a quarter of u's spacing, so u + u^3 P rounds to u (subnormal u: the product
+// vanishes). A verified branch's rotation error (<= 1e-9 rad) always takes this road.
+template <class V>
+DHKIN_INLINE V rotation_angle(V s, V c) {
+  if (all(s <= kLinearAtan * c && c > 0.0 && c < INFINITY)) return s / c;
+  return atan2(s, c);
+}
+
 // The error of `state` against `target`: |p - p_t| and the angle of R^T R_t, computed as
 // atan2(s, c) with s = |vee(E - E^T)| / 2, c = (trace E - 1) / 2, E = R^T R_t.
 template <class V, class W>
@@ -234,7 +248,7 @@ DHKIN_INLINE PoseErrorT<Product<V, W>> pose_error(const FrameT<V>& state, const 
                          (e[0][2] - e[2][0]) * (e[0][2] - e[2][0]) +
                          (e[1][0] - e[0][1]) * (e[1][0] - e[0][1]));
   const T c = 0.5 * (e[0][0] + e[1][1] + e[2][2] - 1.0);
-  return {sqrt(dx * dx + dy * dy + dz * dz), atan2(s, c)};
+  return {sqrt(dx * dx + dy * dy + dz * dz), rotation_angle(s, c)};
 }
 
 // The error of T(q) against `target`.

@@ -116,14 +116,22 @@ inline JointsT<Lanes> wrapped_branches(const Plan& plan, const BranchLanes& foun
 
 // Whether two valid branches give one solution (within twice the merge angle): the pipeline
 // then merges them. Every pair a < b at once: lane a against lane b = a ^ m, for m = 1..7.
+// plan.same's test joint by joint, in another order (the test is their conjunction): first the
+// joint where branches m apart split (kSplitJoint), which decides nearly every pair.
 inline bool two_branches_one_solution(const Plan& plan, const JointsT<Lanes>& q, Mask valid) {
   alignas(64) static const double kIndex[kLanes] = {0, 1, 2, 3, 4, 5, 6, 7};
   const Lanes index = Lanes::load(kIndex);
+  const double distance = 2.0 * kMergeAngle;
   for (int m = 1; m < kBranches; ++m) {
-    JointsT<Lanes> other;
-    for (int j = 0; j < kDof; ++j) other[j] = swapped(q[j], m);
-    const Mask pair = valid && swapped(valid, m) && index < swapped(index, m);
-    if (any(pair && plan.same(q, other, 2.0 * kMergeAngle))) return true;
+    Mask close = valid && swapped(valid, m) && index < swapped(index, m);
+    const int first = kSplitJoint[m];
+    for (int k = 0; k < kDof && any(close); ++k) {
+      const int j = k == 0 ? first : (k <= first ? k - 1 : k);
+      Lanes d = q[j] - swapped(q[j], m);
+      if (plan.revolute(j)) d = wrap(d);
+      close = close && !(abs(d) > distance);
+    }
+    if (any(close)) return true;
   }
   return false;
 }

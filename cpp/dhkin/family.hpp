@@ -17,6 +17,10 @@
 namespace dhkin {
 
 constexpr int kBranches = 8;
+// The joint where two branches whose indices differ by the bits d (1..7) part first: that of d's
+// highest bit (4 shoulder: q1, 2 elbow: q3, 1 wrist: q5). Tests of "the same solution" look
+// there first (their answer does not depend on the order of the joints).
+constexpr int kSplitJoint[kBranches] = {0, 4, 2, 2, 0, 0, 0, 0};
 // Numbers an empty answer is explained with (see each family's `explain` in Python).
 constexpr int kWhySize = 6;
 

@@ -289,7 +289,11 @@ class ClosedFormSolver:
         """solve_batch without copies: the core writes each pose's solutions (its branches'
         nearest in-limit copies) straight into the result (``ClosedForm.nearest``)."""
         N, B = targets.shape[0], self.n_branches
-        out = self._batch_arrays(N, B)
+        # uninitialised: the core writes every slot of each pose (empty values past its last
+        # solution), and a rejected pose raises below
+        out: tuple[NDArray[Any], ...] = (
+            np.empty((N, B, self.dof)), np.empty((N, B), np.bool_), np.empty((N, B), np.int16),
+            np.empty((N, B), np.uint8), np.empty((N, B, 2)))
         projection, dropped = np.empty(N), np.empty(N, np.int64)
         reports: list[tuple[int, int, int, int]] = []
 

@@ -248,7 +248,7 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
       Mask maybe = out.ok[a] && out.ok[b] && !declined;
       const int first = kSplitJoint[a ^ b];
       for (int k = 0; k < kDof && any(maybe); ++k) {
-        const int j = k == 0 ? first : (k <= first ? k - 1 : k);
+        const int j = joint_from(first, k);
         maybe = maybe && !block::surely_apart(out.q[a][j], out.q[b][j], plan.revolute(j),
                                               merge_distance);
       }

@@ -126,7 +126,7 @@ inline bool two_branches_one_solution(const Plan& plan, const JointsT<Lanes>& q,
     Mask close = valid && swapped(valid, m) && index < swapped(index, m);
     const int first = kSplitJoint[m];
     for (int k = 0; k < kDof && any(close); ++k) {
-      const int j = k == 0 ? first : (k <= first ? k - 1 : k);
+      const int j = joint_from(first, k);
       Lanes d = q[j] - swapped(q[j], m);
       if (plan.revolute(j)) d = wrap(d);
       close = close && !(abs(d) > distance);

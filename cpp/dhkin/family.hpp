@@ -21,6 +21,8 @@ constexpr int kBranches = 8;
 // highest bit (4 shoulder: q1, 2 elbow: q3, 1 wrist: q5). Tests of "the same solution" look
 // there first (their answer does not depend on the order of the joints).
 constexpr int kSplitJoint[kBranches] = {0, 4, 2, 2, 0, 0, 0, 0};
+// The k-th joint (k = 0..kDof-1) of the order that tests `first` first, then the others in order.
+constexpr int joint_from(int first, int k) { return k == 0 ? first : (k <= first ? k - 1 : k); }
 // Numbers an empty answer is explained with (see each family's `explain` in Python).
 constexpr int kWhySize = 6;
 

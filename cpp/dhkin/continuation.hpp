@@ -11,6 +11,11 @@
 #include "dhkin/newton.hpp"
 #include "dhkin/plan.hpp"
 
+// Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
+extern template Eigen::JacobiSVD<Eigen::Matrix<double, 6, dhkin::kDof>>&
+Eigen::JacobiSVD<Eigen::Matrix<double, 6, dhkin::kDof>>::compute(
+    const Eigen::Matrix<double, 6, dhkin::kDof>&, unsigned int);
+
 namespace dhkin {
 
 namespace continuation {

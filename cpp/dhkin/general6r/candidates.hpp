@@ -195,7 +195,8 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
       if (member > first && angles[member].real == angles[member - 1].real) continue;
       const double angle = angles[member].real;
       const std::uint32_t origin =
-          (std::abs(angles[member].imaginary) > kCluster ? kPaired : 0) | (m > 1 ? kShared : 0);
+          (std::abs(angles[member].imaginary) > kCluster ? std::uint32_t{kPaired} : 0u) |
+          (m > 1 ? std::uint32_t{kShared} : 0u);
       if (m == 1) {
         if (!null_vector(A, B, C, 0.5 * angle, vector)) continue;
         out.push_back({back_substitute(el, right, H, lead + angle, vector.data()), origin});

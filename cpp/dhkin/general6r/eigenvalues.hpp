@@ -15,6 +15,12 @@
 #include "dhkin/general6r/elimination.hpp"
 #include "dhkin/general6r/hessenberg_qr.hpp"
 
+// Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
+extern template Eigen::GeneralizedEigenSolver<dhkin::general6r::Matrix24>&
+Eigen::GeneralizedEigenSolver<dhkin::general6r::Matrix24>::compute(const dhkin::general6r::Matrix24&,
+                                                                  const dhkin::general6r::Matrix24&,
+                                                                  bool);
+
 namespace dhkin::general6r {
 
 namespace eigenvalues_detail {

@@ -47,6 +47,21 @@ constexpr int kInverseIterations = 2;
 // A basis of a null space (12 x m, m <= kMaxSplit).
 using Basis = Eigen::Matrix<double, kMonomials, Eigen::Dynamic, 0, kMonomials, kMaxSplit>;
 using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSplit, kMaxSplit>;
+// The low and the high rows of shift_operator (at most 9 x kMaxSplit).
+using ShiftRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, kMaxSplit>;
+
+}  // namespace dhkin::general6r
+
+// Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
+extern template Eigen::EigenSolver<dhkin::general6r::Small>&
+Eigen::EigenSolver<dhkin::general6r::Small>::compute(const Eigen::EigenBase<dhkin::general6r::Small>&,
+                                                   bool);
+extern template Eigen::EigenSolver<dhkin::general6r::Small>::EigenvectorsType
+Eigen::EigenSolver<dhkin::general6r::Small>::eigenvectors() const;
+extern template Eigen::JacobiSVD<dhkin::general6r::ShiftRows>&
+Eigen::JacobiSVD<dhkin::general6r::ShiftRows>::compute(const dhkin::general6r::ShiftRows&, unsigned int);
+
+namespace dhkin::general6r {
 
 // M at the half angle `half`, homogeneously: A s^2 + B s c + C c^2 (c, s its cosine and sine),
 // scaled so that its largest weight is one (x = tan(half); x = infinity is c = 0).
@@ -176,9 +191,8 @@ inline bool null_space(const Matrix12& A, const Matrix12& B, const Matrix12& C, 
 // reciprocal condition of at least kSeparated (X then accurate to ~sqrt(eps)), else the best.
 inline Small shift_operator(const Basis& V, bool along_b) {
   const int m = static_cast<int>(V.cols());
-  using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, kMaxSplit>;
   const int n_rows = along_b ? 8 : 9;
-  Rows low(n_rows, m), high(n_rows, m);
+  ShiftRows low(n_rows, m), high(n_rows, m);
   int row = 0;
   for (int i = 0; i < 4; ++i) {
     for (int j = 0; j < 3; ++j) {
@@ -195,9 +209,9 @@ inline Small shift_operator(const Basis& V, bool along_b) {
   for (int k = 0; k < kRotations; ++k) {
     const double delta = k * kPi / kRotations;
     const double cd = std::cos(delta), sd = std::sin(delta);
-    const Rows R0 = cd * low + sd * high;
-    const Rows R1 = cd * high - sd * low;
-    const Eigen::JacobiSVD<Rows> svd(R0, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const ShiftRows R0 = cd * low + sd * high;
+    const ShiftRows R1 = cd * high - sd * low;
+    const Eigen::JacobiSVD<ShiftRows> svd(R0, Eigen::ComputeThinU | Eigen::ComputeThinV);
     const auto& sv = svd.singularValues();
     if (!(sv(0) > 0.0)) continue;
     const double score = sv(m - 1) / sv(0);

@@ -18,6 +18,10 @@
 #include "dhkin/general6r/back_substitution.hpp"
 #include "dhkin/general6r/elimination.hpp"
 
+// Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
+extern template Eigen::JacobiSVD<dhkin::general6r::RightSide>&
+Eigen::JacobiSVD<dhkin::general6r::RightSide>::compute(const dhkin::general6r::RightSide&, unsigned int);
+
 namespace dhkin::general6r {
 
 // Rows of Q whose singular value is below this fraction of the largest are its null space.

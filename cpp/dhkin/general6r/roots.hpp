@@ -19,6 +19,10 @@
 #include "dhkin/plan.hpp"
 #include "dhkin/right_svd.hpp"
 
+// Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
+extern template Eigen::JacobiSVD<dhkin::general6r::Jacobian>&
+Eigen::JacobiSVD<dhkin::general6r::Jacobian>::compute(const dhkin::general6r::Jacobian&, unsigned int);
+
 namespace dhkin::general6r {
 
 // Refinement budget (chain evaluations) per start.

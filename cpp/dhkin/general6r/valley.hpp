@@ -23,6 +23,9 @@
 #include "dhkin/general6r/members.hpp"
 #include "dhkin/general6r/roots.hpp"
 
+// Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
+extern template void Eigen::PartialPivLU<Eigen::Matrix<double, dhkin::kDof, dhkin::kDof>>::compute();
+
 namespace dhkin::general6r {
 
 // Longest continuation step (rad, joint space; a step whose corrector fails is retried half as

@@ -147,14 +147,14 @@ struct WristRoots {
 // branches), theta = +- the computed angle, and t6 from the remainder Ry(-theta) Rz(-t4) H, so
 // that the pose error is what the choice costs.
 //
-// `turn_uncertainty` (rad, per arm; null: none): how far turn23 may be off because the arm above
-// is only as good as the pose (elbow_uncertainty); the wrist angle inherits it, so the wrist
-// counts as near singular within that much more than the seed band.
+// `turn_uncertainty` (rad, per arm; 0 where the arm is exact): how far turn23 may be off because
+// the arm above is only as good as the pose (elbow_uncertainty); the wrist angle inherits it, so
+// the wrist counts as near singular within that much more than the seed band.
 template <int N, class V>
 DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* const* columns,
                          const V* turn23, const JointsT<V>& seed,
-                         const FamilyRequestT<V>& request, WristRoots<V>* roots,
-                         const V* turn_uncertainty = nullptr) {
+                         const FamilyRequestT<V>& request, const V (&turn_uncertainty)[N],
+                         WristRoots<V>* roots) {
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
   SinCosT<V> t23[N], s_theta[N], s4[N][2];
   V t4[N][2], t5[N][2];  // of each wrist branch
@@ -167,8 +167,7 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
     const V h02 = h[a].h2.x, h12 = h[a].h2.y;
     sine[a] = sqrt(h02 * h02 + h12 * h12);
     roots[a].flag = bits_if(sine[a] <= kFlagBand, kWrist);
-    const V band = turn_uncertainty == nullptr ? V(request.seed_angle)
-                                               : request.seed_angle + turn_uncertainty[a];
+    const V band = request.seed_angle + turn_uncertainty[a];
     roots[a].near = bits_if(sine[a] <= band, kWrist);
     seeded[a] = roots[a].near != 0 && (request.use_seed & kWrist) != 0;
   }
@@ -253,8 +252,9 @@ DHKIN_INLINE WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns
                                  V turn23, const JointsT<V>& seed,
                                  const FamilyRequestT<V>& request) {
   const TargetColumns<V>* arm[1] = {&columns};
+  const V exact[1] = {V(0.0)};  // the arm given, without uncertainty
   WristRoots<V> roots[1];
-  wrists<1>(g, arm, &turn23, seed, request, roots);
+  wrists<1>(g, arm, &turn23, seed, request, exact, roots);
   return roots[0];
 }
 
@@ -339,7 +339,7 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
   WristRoots<V> w[4];
   const V turn_uncertainty[4] = {arm_uncertainty[0], arm_uncertainty[0], arm_uncertainty[1],
                                  arm_uncertainty[1]};
-  wrists<4>(g, arm_columns, turn23, seed, request, w, turn_uncertainty);
+  wrists<4>(g, arm_columns, turn23, seed, request, turn_uncertainty, w);
   for (int b = 0; b < kBranches; ++b) {
     const int s = b / 4, e = (b / 2) % 2, k = 2 * s + e, wb = b % 2;
     const auto arm_valid =

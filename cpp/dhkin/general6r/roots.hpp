@@ -28,6 +28,14 @@ constexpr int kBudget = 120;
 // start and converges in a few Newton steps (at a double root linearly, halving per step: from
 // 1e-8 to 1e-12 within ~15); a truly complex one never converges, and the full budget spent on
 // it was most of the refinement's time (0.8 such per pose on the CRX-10iA and xArm6).
+// Such a start also stops at its first descent step that shrinks the squared error less than
+// kPolishGain-fold (newton::Settings::stop_on_stall): a start converging on a root gains more
+// per step (quadratically, or fourfold at a double root, whose error halves per step), while a
+// start with no real root near it cycles or crawls, gaining less, for its whole budget (0.43
+// such starts a CRX-10iA pose, ~21 us each). The rule also stops half of the paired starts that
+// would have reached a root after a slow first descent (their first steps far from it); on
+// 3 x 10^4 random poses and check_general6r's sets every such root is found by its own real
+// eigenvalue's start (docs/general6r.md, "Speed, sixth pass").
 constexpr int kPairBudget = 40;
 // Roots whose smallest singular value (scaled Jacobian) is at most this get their fold partner
 // probed (fold_partner). Near a fold two roots lie d ~ 2 sigma / kappa apart along the weak
@@ -247,7 +255,7 @@ inline int basin_of(const Joints& q, const std::vector<Root>& roots, double lips
 // that are one root. Only the elimination's starts are starts: the seed never is (it chooses
 // among the roots, it does not find them). A start of a real eigenvalue takes full Newton steps
 // first (full_steps), refine() where they do not reach the rounding; paired starts go to
-// refine() with kPairBudget. The roots reached from
+// refine() with kPairBudget, stopping where a descent step stalls. The roots reached from
 // shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
 // probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
 // partner, both 5e-4 from singular near a singular root, was found no other way); those of the
@@ -291,7 +299,7 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     if (start.origin >= kMoved) {
       error = back_from_moved(chain, target, q, moves, goal, tolerance);
     } else if (start.origin & kPaired) {
-      refine(chain, target, q, JointMask{}, goal, {kPairBudget, newton::kGrowth, 0.0});
+      refine(chain, target, q, JointMask{}, goal, {kPairBudget, newton::kGrowth, 0.0, true});
       error = check(chain, q.data(), target);
     } else {
       const FullStepRoot quick = full_steps(chain, shape, target, q, goal, lever);

@@ -27,7 +27,8 @@ constexpr int kBudget = 120;
 // chain that the model's rounding or its fold made complex lies within the imaginary band of the
 // start and converges in a few Newton steps (at a double root linearly, halving per step: from
 // 1e-8 to 1e-12 within ~15); a truly complex one never converges, and the full budget spent on
-// it was most of the refinement's time (0.8 such per pose on the CRX-10iA and xArm6).
+// it was most of the refinement's time (0.8 such per pose on the CRX-10iA and xArm6). A moved
+// pose's paired start has it (back_from_moved); the pose's own take refine_paired's steps.
 constexpr int kPairBudget = 40;
 // A paired start's first kCrawlSteps steps run as any start's; from then on it stops at its
 // first descent step that shrinks the squared error less than kPolishGain-fold
@@ -36,7 +37,9 @@ constexpr int kPairBudget = 40;
 // that reaches a root may first crawl towards it by steps cut to kMaxJointStep, each gaining
 // little (the M-430iA/2P's near-fold roots: ~8 such steps, then quadratic), and a joint has at
 // most pi rad to cover: ceil(pi / kMaxJointStep) = 11 steps. Past those, a converging start
-// gains more per step (quadratically, or fourfold at a double root, whose error halves).
+// gains more per step (quadratically, or fourfold at a double root, whose error halves) but for a
+// few (70 of 4,091 on 10^4 random CRX-10iA poses), each of a root that its own real eigenvalue's
+// start finds (docs/general6r.md, "Speed, sixth pass": no root lost).
 constexpr int kCrawlSteps = 11;
 static_assert(kCrawlSteps * newton::kMaxJointStep >= kPi, "a crawl covers pi");
 static_assert((kCrawlSteps - 1) * newton::kMaxJointStep < kPi, "the fewest such steps");

@@ -31,8 +31,36 @@ constexpr int kBudget = 120;
 // chain that the model's rounding or its fold made complex lies within the imaginary band of the
 // start and converges in a few Newton steps (at a double root linearly, halving per step: from
 // 1e-8 to 1e-12 within ~15); a truly complex one never converges, and the full budget spent on
-// it was most of the refinement's time (0.8 such per pose on the CRX-10iA and xArm6).
+// it was most of the refinement's time (0.8 such per pose on the CRX-10iA and xArm6). A moved
+// pose's paired start has it (back_from_moved); the pose's own take refine_paired's steps.
 constexpr int kPairBudget = 40;
+// A paired start's first kCrawlSteps steps run as any start's; from then on it stops at its
+// first descent step that shrinks the squared error less than kPolishGain-fold
+// (newton::Settings::stop_on_stall). A start with no real root near it cycles (its error
+// rising and falling for all kMaxSteps: 0.43 such starts a CRX-10iA pose, ~21 us each); one
+// that reaches a root may first crawl towards it by steps cut to kMaxJointStep, each gaining
+// little (the M-430iA/2P's near-fold roots: ~8 such steps, then quadratic), and a joint has at
+// most pi rad to cover: ceil(pi / kMaxJointStep) = 11 steps. Past those, a converging start
+// gains more per step (quadratically, or fourfold at a double root, whose error halves) but for a
+// few (70 of 4,091 on 10^4 random CRX-10iA poses), each of a root that its own real eigenvalue's
+// start finds (docs/general6r.md, "Speed, sixth pass": no root lost).
+constexpr int kCrawlSteps = 11;
+static_assert(kCrawlSteps * newton::kMaxJointStep >= kPi, "a crawl covers pi");
+static_assert((kCrawlSteps - 1) * newton::kMaxJointStep < kPi, "the fewest such steps");
+
+// refine() of a paired start, in place (kCrawlSteps steps, then until a descent step stalls;
+// kMaxSteps in all, as one refine() would take). A root reached within the first steps but not
+// yet polished to the rounding (at_rounding, `lever`) polishes on in the second refine(), whose
+// stall rule is then refine()'s own polishing rule.
+inline void refine_paired(const Chain& chain, const Frame& target, Joints& q, double goal,
+                          double lever) {
+  const PoseError first =
+      refine(chain, target, q, JointMask{}, goal, {kCrawlSteps + 1, newton::kGrowth, 0.0});
+  if (at_rounding(first, goal, lever)) return;
+  refine(chain, target, q, JointMask{}, goal,
+         {newton::kMaxSteps - kCrawlSteps + 1, newton::kGrowth, 0.0, true});
+}
+
 // Roots whose smallest singular value (scaled Jacobian) is at most this get their fold partner
 // probed (fold_partner). Near a fold two roots lie d ~ 2 sigma / kappa apart along the weak
 // direction (kappa ~1 rad^-1 on arms of order-one lengths); where that direction has no component
@@ -251,7 +279,7 @@ inline int basin_of(const Joints& q, const std::vector<Root>& roots, double lips
 // that are one root. Only the elimination's starts are starts: the seed never is (it chooses
 // among the roots, it does not find them). A start of a real eigenvalue takes full Newton steps
 // first (full_steps), refine() where they do not reach the rounding; paired starts go to
-// refine() with kPairBudget. The roots reached from
+// refine_paired(). The roots reached from
 // shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
 // probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
 // partner, both 5e-4 from singular near a singular root, was found no other way); those of the
@@ -295,7 +323,7 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     if (start.origin >= kMoved) {
       error = back_from_moved(chain, target, q, moves, goal, tolerance);
     } else if (start.origin & kPaired) {
-      refine(chain, target, q, JointMask{}, goal, {kPairBudget, newton::kGrowth, 0.0});
+      refine_paired(chain, target, q, goal, lever);
       error = check(chain, q.data(), target);
     } else {
       const FullStepRoot quick = full_steps(chain, shape, target, q, goal, lever);

@@ -72,25 +72,30 @@ inline bool least_squares(const double* J, const double* e, const JointMask& fix
     ++m;
   }
   for (int k = 0; k < m; ++k) {  // Householder reflection of column k below the diagonal
+    // Column k is zero below row 6 + k: a damping row 6 + c holds only its diagonal entry until
+    // reflection c (c >= k) reaches it, and a fixed joint's damping row stays zero. The sums over
+    // rows k .. 6 + k are those over every row below k with their zero terms dropped (the same
+    // values, short of the sign of a zero), and the reflection leaves the rows below unchanged.
+    const int end = 7 + k;
     double length = 0.0;
-    for (int r = k; r < rows; ++r) length += A[r][k] * A[r][k];
+    for (int r = k; r < end; ++r) length += A[r][k] * A[r][k];
     length = std::sqrt(length);
     if (length == 0.0) return false;
     const double alpha = A[k][k] >= 0.0 ? -length : length;
     A[k][k] -= alpha;
     double v_norm = 0.0;
-    for (int r = k; r < rows; ++r) v_norm += A[r][k] * A[r][k];
+    for (int r = k; r < end; ++r) v_norm += A[r][k] * A[r][k];
     if (v_norm > 0.0) {
       for (int c = k + 1; c < m; ++c) {
         double d = 0.0;
-        for (int r = k; r < rows; ++r) d += A[r][k] * A[r][c];
+        for (int r = k; r < end; ++r) d += A[r][k] * A[r][c];
         const double factor = 2.0 * d / v_norm;
-        for (int r = k; r < rows; ++r) A[r][c] -= factor * A[r][k];
+        for (int r = k; r < end; ++r) A[r][c] -= factor * A[r][k];
       }
       double d = 0.0;
-      for (int r = k; r < rows; ++r) d += A[r][k] * b[r];
+      for (int r = k; r < end; ++r) d += A[r][k] * b[r];
       const double factor = 2.0 * d / v_norm;
-      for (int r = k; r < rows; ++r) b[r] -= factor * A[r][k];
+      for (int r = k; r < end; ++r) b[r] -= factor * A[r][k];
     }
     A[k][k] = alpha;  // R's diagonal
   }

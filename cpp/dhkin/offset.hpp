@@ -295,17 +295,77 @@ static_assert(kMemberGrid * kMemberStep >= kMemberHalfWidth &&
                   (kMemberGrid - 1) * kMemberStep < kMemberHalfWidth,
               "kMemberGrid = ceil(kMemberHalfWidth / kMemberStep)");
 
+// The grid's points, in blocks of kLanes (the last block's spare lanes are not read).
+constexpr int kMemberPoints = 2 * kMemberGrid + 1;
+constexpr int kMemberBlocks = (kMemberPoints + kLanes - 1) / kLanes;
+
+// member()'s distance at each point of the nearest-member grid, for both elbow branches (infinity
+// where the branch has no member): grid point i is t = seed[5] + (i - kMemberGrid) kMemberStep.
+struct MemberGrid {
+  alignas(64) double distance[2][kMemberBlocks * kLanes];
+};
+
+// The grid of nearest_member with kLanes points at a time, both elbow branches from one setup:
+// each lane's distance is member()'s for its point, bit for bit (the same operations per lane;
+// a point whose axis 4 lies out of reach is moved onto it by kept_in_reach, lane by lane).
+inline void member_grid(const OffsetGeometry& g, const Frame& T_home, const SinCos& t1, double q5,
+                        double reach_side, const Joints& seed, const FamilyRequest& request,
+                        MemberGrid& grid) {
+  const FrameT<Lanes> home = broadcast<Lanes>(T_home);
+  const SinCos t5 = sincos(-q5);
+  JointsT<Lanes> seeds;
+  for (int j = 0; j < kDof; ++j) seeds[j] = Lanes(seed[j]);
+  const FamilyRequestT<Lanes> requests{&seeds,         request.use_seed,    request.seed_angle,
+                                       request.seed_length, request.clamp, request.only_branch,
+                                       request.at_seed};
+  const double low = std::abs(g.upper_length - g.forearm_length);
+  const double high = g.upper_length + g.forearm_length;
+  alignas(64) double points[kLanes];
+  for (int block = 0; block < kMemberBlocks; ++block) {
+    for (int l = 0; l < kLanes; ++l) {
+      points[l] = seed[5] + (block * kLanes + l - kMemberGrid) * kMemberStep;
+    }
+    Lanes t = Lanes::load(points);
+    TurnsT<Lanes> turns{{Lanes(t5.s), Lanes(t5.c)}, sincos(-t), {Lanes(t1.s), Lanes(t1.c)}};
+    Vec3T<Lanes> arm = arm_point(g, home, turns);
+    // kept_in_reach's own test: only these lanes may move
+    const Lanes span = norm(arm);
+    for_each_lane(span > high + request.clamp || span < low - request.clamp, [&](int l) {
+      Turns turns_l = lane(turns, l);
+      const double t_l = lane(t, l);
+      const double kept = kept_in_reach(g, T_home, turns_l, lane(arm, l), q5, t_l, request.clamp);
+      if (kept != t_l) {
+        turns_l.q6 = sincos(-kept);
+        set_lane(t, l, kept);
+        set_lane(turns, l, turns_l);
+        set_lane(arm, l, arm_point(g, T_home, turns_l));
+      }
+    });
+    const ElbowSetup<Lanes> setup = elbow_setup(g, home, turns, arm, reach_side, request.clamp);
+    for (int e = 0; e < 2; ++e) {
+      const ElbowRoot<Lanes> root = elbow(g, setup, arm, seeds[1], requests, e);
+      const Lanes a = wrap(root.q2 - seed[1]), b = wrap(root.q3 - seed[2]),
+                  c = wrap(root.q4 - seed[3]), d = wrap(t - seed[5]);
+      const Lanes distance = a * a + b * b + c * c + d * d;
+      const Mask valid = root.valid && abs(distance) < INFINITY;
+      select(valid, distance, Lanes(INFINITY)).store(grid.distance[e] + block * kLanes);
+    }
+  }
+}
+
 // At the wrist singularity the pose leaves a one-parameter family (q6 free, q2, q3, q4 following
 // it): the member nearest the seed in joint space (squared distance over joints 2-4 and 6),
-// searched over q6. False when no member of this elbow branch exists near the seed.
+// searched over q6 (the grid's distances from member_grid). False when no member of this elbow
+// branch exists near the seed.
 inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const SinCos& t1,
                            double q5, double reach_side, const Joints& seed,
-                           const FamilyRequest& request, int e, Member& found) {
+                           const FamilyRequest& request, int e, const MemberGrid& grid,
+                           Member& found) {
   double best_t = seed[5], best = std::numeric_limits<double>::infinity();
   for (int k = -kMemberGrid; k <= kMemberGrid; ++k) {
     const double t = seed[5] + k * kMemberStep;
-    const Member m = member(g, T_home, t1, q5, t, reach_side, seed, request, e);
-    if (m.valid && m.distance < best) best_t = t, best = m.distance;
+    const double distance = grid.distance[e][k + kMemberGrid];
+    if (distance < best) best_t = t, best = distance;
   }
   if (best == std::numeric_limits<double>::infinity()) return false;
   const auto value = [&](double t) {
@@ -457,20 +517,30 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
     for_each_lane(wrist_seeded[s] && q1_valid[s], [&](int l) {  // the member nearest the seed
       Joints seed_l;
       const FamilyRequest request_l = lane(request, l, seed_l);
+      MemberGrid grid;
+      bool gridded = false;
       for (int e = 0; e < 2; ++e) {
         const int b = 4 * s + 2 * e + w;
         if (request.only_branch >= 0 && b != request.only_branch) {
           set_lane(out.valid[b], l, false);
           continue;
         }
+        const Frame home = lane(T_home, l);
+        const SinCos minus_q1_l = lane(minus_q1, l);
+        const double q5_l = lane(q5[k], l);
         Member found;
-        const bool located =
-            request.at_seed
-                ? (found = member(g, lane(T_home, l), lane(minus_q1, l), lane(q5[k], l),
-                                  seed_l[5], reach_side, seed_l, request_l, e))
-                      .valid
-                : nearest_member(g, lane(T_home, l), lane(minus_q1, l), lane(q5[k], l),
-                                 reach_side, seed_l, request_l, e, found);
+        bool located;
+        if (request.at_seed) {
+          found = member(g, home, minus_q1_l, q5_l, seed_l[5], reach_side, seed_l, request_l, e);
+          located = found.valid;
+        } else {
+          if (!gridded) {
+            member_grid(g, home, minus_q1_l, q5_l, reach_side, seed_l, request_l, grid);
+            gridded = true;
+          }
+          located = nearest_member(g, home, minus_q1_l, q5_l, reach_side, seed_l, request_l, e,
+                                   grid, found);
+        }
         if (located) {
           set_lane(out.q[b][1], l, found.q2);
           set_lane(out.q[b][2], l, found.q3);

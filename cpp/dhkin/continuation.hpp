@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <iterator>
 
 #include "dhkin/newton.hpp"
 #include "dhkin/plan.hpp"
@@ -133,20 +135,47 @@ inline PoseError off_fold(const Chain& chain, const Frame& target, Joints& q,
   return best_error;
 }
 
+// The twin search's starts from one solution q, each refined as find_twin refines it: they
+// depend on q, the chain and the target alone, so a second search from the same q (one pose's
+// root merged with several branches) reads them here instead of refining them again.
+struct TwinSearch {
+  static constexpr int kStarts = 2 * static_cast<int>(std::size(continuation::kTwinSteps));
+  Joints from{};       // the solution searched from (valid when `weakest_known`)
+  bool weakest_known = false;
+  Joints weakest{};    // J's weakest direction at `from`
+  int refined = 0;     // starts refined so far, in search order
+  std::array<Joints, kStarts> root{};
+  std::array<PoseError, kStarts> error{};
+};
+
 // A solution near the solution q on the far side of the fold it sits by, other than q and the ok
 // rows of `known`: Newton from q displaced along J's weakest direction, kTwinSteps each way. `out`
 // receives the first verified one that differs from all of them by more than `distinct` on some
-// joint (mod 2pi); false when none does.
+// joint (mod 2pi); false when none does. `search` keeps the refined starts of the last q searched
+// from (the same chain and target on every call).
 inline bool find_twin(const Chain& chain, const Frame& target, const Joints& q, double tolerance,
-                      double distinct, const Branches& known, Joints& out) {
+                      double distinct, const Branches& known, Joints& out, TwinSearch& search) {
   using namespace continuation;
-  const Joints weakest = weakest_direction(chain, q, JointMask{});
+  if (!search.weakest_known || std::memcmp(search.from.data(), q.data(), sizeof q) != 0) {
+    search.from = q;
+    search.weakest = weakest_direction(chain, q, JointMask{});
+    search.weakest_known = true;
+    search.refined = 0;
+  }
   const JointMask none{};
+  int start = 0;
   for (double size : kTwinSteps) {
     for (double sign : {1.0, -1.0}) {
-      for (int j = 0; j < kDof; ++j) out[j] = q[j] + sign * size * weakest[j];
-      refine(chain, target, out, none, tolerance);
-      const PoseError error = check(chain, out.data(), target);
+      if (start == search.refined) {
+        Joints& trial = search.root[start];
+        for (int j = 0; j < kDof; ++j) trial[j] = q[j] + sign * size * search.weakest[j];
+        refine(chain, target, trial, none, tolerance);
+        search.error[start] = check(chain, trial.data(), target);
+        ++search.refined;
+      }
+      out = search.root[start];
+      const PoseError& error = search.error[start];
+      ++start;
       if (error.within(tolerance) && apart(out, q, distinct)) {
         bool fresh = true;
         for (int b = 0; b < kBranches; ++b) {

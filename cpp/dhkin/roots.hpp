@@ -248,6 +248,7 @@ inline void valley_roots(const Plan& plan, const Frame& T_dh, const Frame& T_at,
 inline void merge_duplicates(const Plan& plan, const Frame& T, const Joints& seed,
                              double tolerance, const std::array<bool, kBranches>& member,
                              Branches& branches) {
+  TwinSearch search;
   for (int a = 0; a < kBranches; ++a) {
     if (!branches.ok[a]) continue;
     for (int b = a + 1; b < kBranches; ++b) {
@@ -257,7 +258,8 @@ inline void merge_duplicates(const Plan& plan, const Frame& T, const Joints& see
       branches.ok[b] = false;
       Joints twin;
       if (!(member[a] || member[b]) &&
-          find_twin(plan.chain, T, branches.q[a], tolerance, 2.0 * kMergeAngle, branches, twin)) {
+          find_twin(plan.chain, T, branches.q[a], tolerance, 2.0 * kMergeAngle, branches, twin,
+                    search)) {
         branches.ok[b] = true;
         plan.wrap_revolute(twin);
         branches.q[b] = twin;

@@ -8,7 +8,6 @@
 // A pose the block declines goes through the pipeline and expand (pipeline.hpp, expand.hpp).
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -250,26 +249,6 @@ inline void put_nearest(const Plan& plan, const BlockAnswer& answer, double tole
   }
 }
 
-// The next block's poses (from pose `first` on, up to kLanes of the n) asked of memory now, while
-// this block is solved: 10^4 poses (1.3 MB) exceed the caches, and perf put the copy of a
-// block's entries into lanes (direct_block) on the loads of each pose's second line. A hint
-// only: it changes no value.
-inline void prefetch_poses(const double* T, std::size_t n, std::size_t first) {
-#if defined(__GNUC__)
-  constexpr std::size_t kLine = 64;  // bytes: a cache line (x86-64 and common ARM cores)
-  if (first >= n) return;
-  const std::size_t count = std::min<std::size_t>(kLanes, n - first);
-  const char* const begin = reinterpret_cast<const char*>(T + 16 * first);
-  const std::size_t bytes = count * 16 * sizeof(double);
-  for (std::size_t offset = 0; offset < bytes; offset += kLine) {
-    __builtin_prefetch(begin + offset);
-  }
-  __builtin_prefetch(begin + bytes - 1);  // the last line, when the poses do not start on one
-#else
-  (void)T, (void)n, (void)first;
-#endif
-}
-
 // Pose i through the pipeline and expand(copies = false), into `out`.
 inline void put_pipeline(const Plan& plan, const TargetFrames& frames, const double* T,
                          const Joints& seed, double tolerance, const NearestOutputs& out,
@@ -315,7 +294,6 @@ inline BatchReport solve_nearest(const Plan& plan, const TargetFrames& frames, c
       poses.T[l] = T + 16 * (first + l);
       poses.seed[l] = seeds + (first + l) * seed_stride;
     }
-    batch::prefetch_poses(T, n, first + kLanes);
     if (!plan.refine) {
       direct_block(plan, frames, poses, tolerance, answer, found, known);
       batch::put_nearest(plan, answer, tolerance, out, first, poses.count, streamed, report);

@@ -178,16 +178,16 @@ DHKIN_INLINE SinCosT<V> negated(const SinCosT<V>& t) {
 // |sin x| <= band for a band in (0, 1e-3], the same answer as abs(sincos(x).s) <= band without
 // the cosine: with x = k pi/2 + r, |sin x| is |sin r| for even k, else |cos r| > 0.7; and where
 // |r| > 2 band, |sin r| > band (sin r >= r (1 - r^2 / 6)), so the polynomial is evaluated only
-// where some lane is closer.
+// where some lane is closer. Lanes outside `wanted` are not measured (false).
 template <class V>
-DHKIN_INLINE MaskOf<V> small_sine(V x, double band) {
+DHKIN_INLINE MaskOf<V> small_sine(V x, double band, MaskOf<V> wanted = every_lane<V>(true)) {
   using namespace elementary;
   const V shifted = x * kTwoOverPi + kRounder;
   const V k = shifted - kRounder;
   const V r = (x - k * kHalfPiHead) - k * kHalfPiTail;
-  auto result = (rounded_bits(shifted) & 1) == 0 && abs(r) <= 2.0 * band;
+  auto result = wanted && (rounded_bits(shifted) & 1) == 0 && abs(r) <= 2.0 * band;
   if (any(result)) result = result && abs(sincos(x).s) <= band;
-  for_each_lane(outside(x, kReductionLimit),
+  for_each_lane(wanted && outside(x, kReductionLimit),
                 [&](int l) { set_lane(result, l, std::fabs(std::sin(lane(x, l))) <= band); });
   return result;
 }

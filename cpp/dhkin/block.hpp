@@ -259,7 +259,8 @@ inline void direct_block(const Plan& plan, const TargetFrames& frames, const Pos
   }
   for (int b = 0; b < kBranches; ++b) {
     out.ok[b] = out.ok[b] && !declined;
-    out.flags[b] = (found.flags[b] & kShoulder) | plan.value_flags(out.q[b]);
+    // the flags of the lanes with a solution (put_nearest reads no others)
+    out.flags[b] = (found.flags[b] & kShoulder) | plan.value_flags(out.q[b], out.ok[b]);
   }
   for (int l = 0; l < kLanes; ++l) {
     out.answered[l] = !lane(declined, l);

@@ -119,19 +119,24 @@ struct Plan {
 
   // The kWrist and kElbow flags of joint values q: each singularity's measure (|sin| of the wrist
   // angle, of the elbow angle; the slide's distance from its merge over the scale) at most
-  // kFlagBand, from q itself (family geometry of the ideal model).
+  // kFlagBand, from q itself (family geometry of the ideal model). Only the lanes `wanted` are
+  // measured (the others get no flags): the batch's lanes without a solution hold zeros or NaN,
+  // which sent small_sine to its sine polynomial or to the C library's sine.
   template <class V>
-  BitsOf<V> value_flags(const JointsT<V>& q) const {
+  BitsOf<V> value_flags(const JointsT<V>& q, MaskOf<V> wanted = every_lane<V>(true)) const {
     if (family == Family::offset_wrist) {
-      return bits_if(small_sine(q[4] - offset.psi, kFlagBand), kWrist) |
-             bits_if(small_sine(q[2] - offset.elbow_base, kFlagBand), kElbow);
+      return bits_if(small_sine(q[4] - offset.psi, kFlagBand, wanted), kWrist) |
+             bits_if(small_sine(q[2] - offset.elbow_base, kFlagBand, wanted), kElbow);
     }
     const SphericalGeometry& g = spherical;
-    const BitsOf<V> wrist = bits_if(small_sine(g.wrist_directions[1] * q[4] + g.tilt, kFlagBand), kWrist);
+    const BitsOf<V> wrist =
+        bits_if(small_sine(g.wrist_directions[1] * q[4] + g.tilt, kFlagBand, wanted), kWrist);
     if (family == Family::spherical_wrist) {
-      return wrist | bits_if(small_sine(g.signs[2] * q[2] + g.bend_at_zero, kFlagBand), kElbow);
+      return wrist |
+             bits_if(small_sine(g.signs[2] * q[2] + g.bend_at_zero, kFlagBand, wanted), kElbow);
     }
-    return wrist | bits_if(abs(g.signs[2] * q[2] + g.slide_along) <= kFlagBand * g.scale, kElbow);
+    return wrist | bits_if(wanted && abs(g.signs[2] * q[2] + g.slide_along) <= kFlagBand * g.scale,
+                           kElbow);
   }
 
   // Revolute values wrapped to (-pi, pi], prismatic ones kept.

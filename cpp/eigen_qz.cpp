@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 
 #include "dhkin/general6r/hessenberg_qr.hpp"  // Matrix24
+#include "dhkin/general6r/qz_shifts.hpp"      // QZ's exceptional shifts, a sequence per pencil
 
 template Eigen::GeneralizedEigenSolver<dhkin::general6r::Matrix24>&
 Eigen::GeneralizedEigenSolver<dhkin::general6r::Matrix24>::compute(const dhkin::general6r::Matrix24&,

@@ -14,6 +14,7 @@
 
 #include "dhkin/general6r/elimination.hpp"
 #include "dhkin/general6r/hessenberg_qr.hpp"
+#include "dhkin/general6r/qz_shifts.hpp"
 
 // Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
 extern template Eigen::GeneralizedEigenSolver<dhkin::general6r::Matrix24>&
@@ -96,8 +97,10 @@ inline bool companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, 
 }
 
 // The eigenvalues of the pencil L - x R (an infinite one, beta = 0, as infinity); false where QZ
-// does not converge.
+// does not converge. QZ's exceptional shifts restart their sequence here (qz_shifts.hpp): the
+// eigenvalues depend on the pencil alone.
 inline bool pencil_eigenvalues(const Matrix24& L, const Matrix24& R, Eigenvalues& out) {
+  qz_shifts.restart();
   const Eigen::GeneralizedEigenSolver<Matrix24> qz(L, R, false);
   if (qz.info() != Eigen::Success) return false;
   for (int i = 0; i < kEigenvalues; ++i) {

@@ -336,3 +336,17 @@ def test_folded_near_solutions_on_a_rounded_description() -> None:
                     len(regular) and np.abs(wrapped(regular - expected)).max() > JOINT_TOLERANCE):
                 failures.append(f"{where}: regular roots differ from the unseeded answer's")
     assert not failures, "\n".join(failures)
+
+
+def test_isolated_root_beside_a_curve_is_kept_on_a_rounded_description() -> None:
+    """HC10 q = (90, 180, 180, 180, 180, 90) deg on the rounded generated URDF (sample 10878 of
+    `dhkin validate motoman_hc10 -n 10000`): the q1 + q4 curve of the straight-up arm crosses
+    q5 = 180 deg (q4 - q6 free) there, and the rounded target leaves an isolated root beside
+    the curve (sigma_min 1.1e-6). With the ill-conditioned pose's own starts the elimination's
+    root there came from another point of its cloud, and the walk towards the seed carried it
+    onto the curve, where it merged with the curve's member: the root was missing unseeded. A
+    root above the tolerance that the walk takes onto a curve now stays a row of its own."""
+    robot = dhkin.load("motoman_hc10")
+    model = target_model(robot, "rounded")
+    q = np.radians([90, 180, 180, 180, 180, 90])
+    assert not check_pose(robot, model, RootReference(robot, model, starts=STARTS), q)

@@ -45,8 +45,9 @@ constexpr double kInfinite = 1e150;
 
 // Where a start comes from (bits): a near-real complex pair of eigenvalues (its imaginary angle
 // beyond kCluster, within the band); a cluster of eigenvalues (its root's fold partner is
-// probed); moved pose p (kMoved << p: its root is followed back to the pose).
-enum Origin : std::uint32_t { kPaired = 1, kShared = 2, kMoved = 4 };
+// probed); the pose's own eigenproblem where it is ill-conditioned (all_candidates: refined as a
+// pair's start); moved pose p (kMoved << p: its root is followed back to the pose).
+enum Origin : std::uint32_t { kPaired = 1, kShared = 2, kIll = 4, kMoved = 8 };
 
 struct Start {
   Joints q{};
@@ -231,14 +232,21 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
 // nearly singular (its leading matrix's reciprocal condition ~1e-10 there, 1.5e-3 on the exact
 // pose), but QZ is backward stable and its near-real eigenvalues put starts within 1e-5 of the
 // floor (docs/general6r.md, "The folded M-430iA/2P a hair off"). Extra starts cost a QZ on such
-// poses and never a root: each is verified like any other.
+// poses and never a root: each is verified like any other. Most of them are noise (the pencil is
+// nearly singular): they are refined as a near-real pair's starts are (kIll: refine_paired,
+// which stops a start that cycles with no root near it), a start near a root or a floor
+// converges within its crawl.
 // Returns whether the moved pose was used (false also where T_dh's quantities are not finite).
 // `fallback` false leaves out the fixed starts (a second arrangement's: the first had them).
 inline bool all_candidates(const Elimination& el, const Moves& moves, const Frame& T_dh,
                            std::vector<Start>& out, bool fallback = true) {
+  const std::size_t own = out.size();
   const EliminationInfo info = candidates(el, T_dh, true, out);
   if (std::isnan(info.lead_condition)) return false;
   if (info.lead_condition >= kLeadCondition && !info.degenerate) return false;
+  if (info.lead_condition < kLeadCondition) {
+    for (std::size_t i = own; i < out.size(); ++i) out[i].origin |= kIll;
+  }
   const std::size_t first = out.size();
   candidates(el, moves.motion(1.0) * T_dh, true, out, true);
   for (std::size_t i = first; i < out.size(); ++i) out[i].origin |= kMoved;

@@ -103,13 +103,16 @@ inline void walk_into_limits(const Chain& chain, const Frame& target, const Limi
 // becomes its member nearest the seed (nearest_member). The seed is never a root of its own. A
 // member with no 2pi copy within the limits (widened to the band) is walked into them
 // (walk_into_limits); one that still has none, where the root itself has, stays where the root
-// was. A root that moved onto
+// was. A root that is no point of a curve (sigma above the tolerance) but walked onto one, with
+// no segment of solutions between, stays where it was, the curve's member added after the roots.
+// A root that moved onto
 // an earlier one (the merging rule) is dropped.
 inline void seed_members(const Chain& chain, const Frame& target, const Joints& seed,
                          const Limits& limits, double slack, double tolerance, double lever,
                          double band, std::vector<Root>& roots) {
   const Projection projection = project(chain, target, seed, tolerance, lever, band);
   const double margin = std::max(slack, band);
+  std::vector<Root> members;  // curves' members reached from isolated roots beside them
   for (Root& root : roots) {
     if (!(root.sigma <= band)) continue;
     Joints q = root.q;
@@ -119,9 +122,28 @@ inline void seed_members(const Chain& chain, const Frame& target, const Joints& 
       walk_into_limits(chain, target, limits, margin, tolerance, lever, band, q, error);
     }
     if (!has_copy(limits, q, margin) && has_copy(limits, root.q, margin)) continue;
+    // An isolated root beside a curve of solutions: a root whose smallest singular value is
+    // above the tolerance is no point of a curve (along a curve every point verifies, so the
+    // Jacobian's weakest direction moves the pose by less than the tolerance per radian: sigma
+    // within it, ~1e-17 on a true curve). Where two curves of the table cross and the target is
+    // a hair off (a rounded description), isolated roots remain near the crossing (HC10 q =
+    // (90, 180, 180, 180, 180, 90) deg: sigma 9.2e-7, 2e-5 rad off the q1 + q4 curve), and the
+    // walk carried such a root onto the curve, where its member merged with the curve's own:
+    // the root was lost. Where no segment of solutions ties the member to the root (on_segment:
+    // an elimination root in a curve's cloud, ~1e-7 rad off a line of the CRX-10iA, is tied to
+    // its member), it stays a row of its own, and the curve's member reached is added.
+    if (root.sigma > tolerance) {
+      const double member_sigma = smallest_singular(chain, q, lever, tolerance);
+      if (member_sigma <= tolerance &&
+          !on_segment(chain, target, root.q, q, tolerance, lever, band)) {
+        members.push_back({q, error, member_sigma});
+        continue;
+      }
+    }
     root.q = q;
     root.error = error;
   }
+  roots.insert(roots.end(), members.begin(), members.end());
   keep_distinct(chain, target, tolerance, roots,
                 [band](const Root& root) { return root.sigma <= band; });
 }

@@ -45,8 +45,9 @@ constexpr double kInfinite = 1e150;
 
 // Where a start comes from (bits): a near-real complex pair of eigenvalues (its imaginary angle
 // beyond kCluster, within the band); a cluster of eigenvalues (its root's fold partner is
-// probed); moved pose p (kMoved << p: its root is followed back to the pose).
-enum Origin : std::uint32_t { kPaired = 1, kShared = 2, kMoved = 4 };
+// probed); the pose's own eigenproblem where it is ill-conditioned (all_candidates: refined as a
+// pair's start); moved pose p (kMoved << p: its root is followed back to the pose).
+enum Origin : std::uint32_t { kPaired = 1, kShared = 2, kIll = 4, kMoved = 8 };
 
 struct Start {
   Joints q{};
@@ -214,21 +215,38 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   return info;
 }
 
-// candidates() of T_dh; where its eigenproblem is ill-conditioned (the matrix polynomial is
-// singular, or nearly, at this pose) instead, and where an eigenvalue is degenerate (a curve of
-// solutions at one value of the eliminated joint) as well, those of the pose moved by
+// candidates() of T_dh (by QZ where its eigenproblem is ill-conditioned: the matrix polynomial
+// is singular, or nearly, at this pose) and, there and where an eigenvalue is degenerate (a
+// curve of solutions at one value of the eliminated joint), those of the pose moved by
 // moves.motion(1), whose eigenproblem is regular (solved by QZ, backward stable) with
 // simple eigenvalues: every real root of the moved pose is among its eigenvalues, and every
 // regular root of T_dh lies near one of them (docs/general6r.md, "Every root"). With the moved
 // pose, the fallback starts are starts too: near a highly degenerate singular set (a stretched
 // arm with a free wrist) a moved pose's own eigenproblem can lose the roots it has there.
+// The pose's own eigenvalues stay starts where it is ill-conditioned: a target a hair off a pose
+// with a curve of solutions (the folded M-430iA/2P, q3 = 180 deg, axis 5 on axis 1, its target
+// rounded 2e-10 m off) has no root near the curve but a valley whose floor misses the target by
+// less than the tolerance (5e-11 m): near-solutions that verify. They exist only within the
+// tolerance of the pose, so the moved pose (1e-3 away) has nothing there to follow back, and
+// its starts near the curve do not reach the floor by Newton; the pose's own polynomial is
+// nearly singular (its leading matrix's reciprocal condition ~1e-10 there, 1.5e-3 on the exact
+// pose), but QZ is backward stable and its near-real eigenvalues put starts within 1e-5 of the
+// floor (docs/general6r.md, "The folded M-430iA/2P a hair off"). Extra starts cost a QZ on such
+// poses and never a root: each is verified like any other. Most of them are noise (the pencil is
+// nearly singular): they are refined as a near-real pair's starts are (kIll: refine_paired,
+// which stops a start that cycles with no root near it), a start near a root or a floor
+// converges within its crawl.
 // Returns whether the moved pose was used (false also where T_dh's quantities are not finite).
 // `fallback` false leaves out the fixed starts (a second arrangement's: the first had them).
 inline bool all_candidates(const Elimination& el, const Moves& moves, const Frame& T_dh,
                            std::vector<Start>& out, bool fallback = true) {
-  const EliminationInfo info = candidates(el, T_dh, false, out);
+  const std::size_t own = out.size();
+  const EliminationInfo info = candidates(el, T_dh, true, out);
   if (std::isnan(info.lead_condition)) return false;
   if (info.lead_condition >= kLeadCondition && !info.degenerate) return false;
+  if (info.lead_condition < kLeadCondition) {
+    for (std::size_t i = own; i < out.size(); ++i) out[i].origin |= kIll;
+  }
   const std::size_t first = out.size();
   candidates(el, moves.motion(1.0) * T_dh, true, out, true);
   for (std::size_t i = first; i < out.size(); ++i) out[i].origin |= kMoved;

@@ -322,7 +322,7 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     double sigma_bound = 0.0;  // at q, where full_steps() found it
     if (start.origin >= kMoved) {
       error = back_from_moved(chain, target, q, moves, goal, tolerance);
-    } else if (start.origin & kPaired) {
+    } else if (start.origin & (kPaired | kIll)) {
       refine_paired(chain, target, q, goal, lever);
       error = check(chain, q.data(), target);
     } else {

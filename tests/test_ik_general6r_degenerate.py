@@ -189,6 +189,18 @@ def test_near_fold_roots_all_returned() -> None:
         assert not check_pose(robot, model, RootReference(robot, model, starts=STARTS), q)
 
 
+def answer_failures(robot: dhkin.Robot, T: np.ndarray, answer: np.ndarray,
+                    where: str) -> list[str]:
+    """What is wrong with the solutions (k, 6) of pose T: nothing returned, or a solution not
+    exact on the table (Pinocchio on the generated URDF, within TOLERANCE)."""
+    if not len(answer):
+        return [f"{where}: nothing returned"]
+    position, rotation = oracle_errors(robot, answer, np.repeat(T[None], len(answer), 0))
+    if max(position.max(), rotation.max()) > TOLERANCE:
+        return [f"{where}: a solution is not exact on the table"]
+    return []
+
+
 #: Folded M-430iA/2P poses (q3 = 180 deg: axes 2 and 5 coincide, q2 + q5 fixed) that
 #: `dhkin validate` answered empty on the rounded description: the elimination's members of the
 #: curve lie beyond the limits (q2 = +-180 or q5 = +-180 deg) and, the curve broken into a
@@ -214,12 +226,9 @@ def test_folded_members_walk_into_the_limits_on_a_rounded_description() -> None:
         for label, seed in (("none", None), ("q", q)):
             answer = np.asarray(robot.ik(T, q_seed=seed).q).reshape(-1, 6)
             where = f"{model.description} {pose}, seed {label}"
+            failures += answer_failures(robot, T, answer, where)
             if not len(answer):
-                failures.append(f"{where}: nothing returned")
                 continue
-            position, rotation = oracle_errors(robot, answer, np.repeat(T[None], len(answer), 0))
-            if max(position.max(), rotation.max()) > TOLERANCE:
-                failures.append(f"{where}: a solution is not exact on the table")
             if seed is not None:
                 nearest = np.abs(wrapped(answer - q)).max(axis=1).min()
                 if nearest > JOINT_TOLERANCE + offset:
@@ -317,13 +326,8 @@ def test_folded_near_solutions_on_a_rounded_description() -> None:
             result = unseeded if seed is None else robot.ik(T, q_seed=seed)
             answer = np.asarray(result.q).reshape(-1, 6)
             where = f"{pose}, seed {label}"
-            if not len(answer):
-                failures.append(f"{where}: nothing returned")
-                continue
-            position, rotation = oracle_errors(robot, answer, np.repeat(T[None], len(answer), 0))
-            if max(position.max(), rotation.max()) > TOLERANCE:
-                failures.append(f"{where}: a solution is not exact on the table")
-            if seed is None:
+            failures += answer_failures(robot, T, answer, where)
+            if not len(answer) or seed is None:
                 continue
             distance = np.abs(wrapped(answer - seed)).max(axis=1)
             nearest = int(np.argmin(distance))

@@ -140,10 +140,9 @@ inline PoseError off_fold(const Chain& chain, const Frame& target, Joints& q,
 // root merged with several branches) reads them here instead of refining them again.
 struct TwinSearch {
   static constexpr int kStarts = 2 * static_cast<int>(std::size(continuation::kTwinSteps));
-  Joints from{};       // the solution searched from (valid when `weakest_known`)
-  bool weakest_known = false;
+  Joints from{};       // the solution searched from (none yet while `refined` is 0)
   Joints weakest{};    // J's weakest direction at `from`
-  int refined = 0;     // starts refined so far, in search order
+  int refined = 0;     // starts refined so far, in search order (a search refines at least one)
   std::array<Joints, kStarts> root{};
   std::array<PoseError, kStarts> error{};
 };
@@ -156,10 +155,9 @@ struct TwinSearch {
 inline bool find_twin(const Chain& chain, const Frame& target, const Joints& q, double tolerance,
                       double distinct, const Branches& known, Joints& out, TwinSearch& search) {
   using namespace continuation;
-  if (!search.weakest_known || std::memcmp(search.from.data(), q.data(), sizeof q) != 0) {
+  if (search.refined == 0 || std::memcmp(search.from.data(), q.data(), sizeof q) != 0) {
     search.from = q;
     search.weakest = weakest_direction(chain, q, JointMask{});
-    search.weakest_known = true;
     search.refined = 0;
   }
   const JointMask none{};

@@ -257,6 +257,15 @@ struct Member {
   std::uint8_t flag = 0;  // its kElbow flag
 };
 
+// A member's squared joint distance from the seed over joints 2-4 and 6 (wrapped): q2-q4 of its
+// elbow root, q6 = t (member() for one point, member_grid() for kLanes points).
+template <class V>
+DHKIN_INLINE V member_distance(const ElbowRoot<V>& root, V t, const Joints& seed) {
+  const V a = wrap(root.q2 - seed[1]), b = wrap(root.q3 - seed[2]), c = wrap(root.q4 - seed[3]),
+          d = wrap(t - seed[5]);
+  return a * a + b * b + c * c + d * d;
+}
+
 inline Member member(const OffsetGeometry& g, const Frame& T_home, const SinCos& t1, double q5,
                      double t, double reach_side, const Joints& seed, const FamilyRequest& request,
                      int e) {
@@ -273,9 +282,7 @@ inline Member member(const OffsetGeometry& g, const Frame& T_home, const SinCos&
   const ElbowRoot<double> root = elbow(g, setup, arm, seed[1], request, e);
   Member out;
   out.q2 = root.q2, out.q3 = root.q3, out.q4 = root.q4, out.q6 = t;
-  const double a = wrap(root.q2 - seed[1]), b = wrap(root.q3 - seed[2]),
-               c = wrap(root.q4 - seed[3]), d = wrap(t - seed[5]);
-  out.distance = a * a + b * b + c * c + d * d;
+  out.distance = member_distance(root, t, seed);
   out.valid = root.valid && std::isfinite(out.distance);
   out.flag = root.flag;
   return out;
@@ -344,9 +351,7 @@ inline void member_grid(const OffsetGeometry& g, const Frame& T_home, const SinC
     const ElbowSetup<Lanes> setup = elbow_setup(g, home, turns, arm, reach_side, request.clamp);
     for (int e = 0; e < 2; ++e) {
       const ElbowRoot<Lanes> root = elbow(g, setup, arm, seeds[1], requests, e);
-      const Lanes a = wrap(root.q2 - seed[1]), b = wrap(root.q3 - seed[2]),
-                  c = wrap(root.q4 - seed[3]), d = wrap(t - seed[5]);
-      const Lanes distance = a * a + b * b + c * c + d * d;
+      const Lanes distance = member_distance(root, t, seed);
       const Mask valid = root.valid && abs(distance) < INFINITY;
       select(valid, distance, Lanes(INFINITY)).store(grid.distance[e] + block * kLanes);
     }
@@ -517,6 +522,9 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
     for_each_lane(wrist_seeded[s] && q1_valid[s], [&](int l) {  // the member nearest the seed
       Joints seed_l;
       const FamilyRequest request_l = lane(request, l, seed_l);
+      const Frame home = lane(T_home, l);
+      const SinCos minus_q1_l = lane(minus_q1, l);
+      const double q5_l = lane(q5[k], l);
       MemberGrid grid;
       bool gridded = false;
       for (int e = 0; e < 2; ++e) {
@@ -525,9 +533,6 @@ inline void solve_offset_wrist(const OffsetGeometry& g, const FrameT<V>& T,
           set_lane(out.valid[b], l, false);
           continue;
         }
-        const Frame home = lane(T_home, l);
-        const SinCos minus_q1_l = lane(minus_q1, l);
-        const double q5_l = lane(q5[k], l);
         Member found;
         bool located;
         if (request.at_seed) {

@@ -18,7 +18,9 @@ joint values and put through Pinocchio (``robot.reference().fk``).
 Reported per library, single thread (EAIK's and py-opw's batch calls are given one thread):
 
 * single: median latency of one-pose calls (each call timed, median over the poses, median of
-  the runs' medians); the peers return principal solutions only, like ``ik(copies=False)``;
+  the runs' medians; the libraries' calls interleaved pose by pose, so that their ratio is
+  taken in one machine state); the peers return principal solutions only, like
+  ``ik(copies=False)``;
 * batch: poses per second of the library's batch call over all poses (a Python loop where it
   has none; that is said), median of the runs; runs go round-robin over the libraries;
 * sols/pose, the largest residual against Pinocchio (position m / rotation rad), exact: the share
@@ -370,6 +372,27 @@ def timed_single(library: Library, n: int, runs: int) -> float:
     return statistics.median(medians)
 
 
+def timed_singles(libraries: Sequence[Library], counts: Sequence[int]) -> list[float]:
+    """The median one-pose call time (us) of each library over its poses 0..counts[j]-1, the
+    libraries' calls interleaved pose by pose (the first library of each pose rotates), so
+    that every library is timed in the same machine state: the single-call ratios of one run
+    compare like with like even when the machine's speed drifts during the run."""
+    times: list[list[int]] = [[] for _ in libraries]
+    order = list(range(len(libraries)))
+    gc.disable()
+    try:
+        for k in range(max(counts)):
+            for j in order[k % len(order):] + order[:k % len(order)]:
+                if k < counts[j]:
+                    call = libraries[j].single
+                    start = time.perf_counter_ns()
+                    call(k)
+                    times[j].append(time.perf_counter_ns() - start)
+    finally:
+        gc.enable()
+    return [statistics.median(library_times) / 1000.0 for library_times in times]
+
+
 # The clock of batch calls: wall time by default; --cpu-clock takes the process's CPU time
 # (every thread's), which a shared machine's other jobs do not inflate.
 BATCH_CLOCK: list[Callable[[], float]] = [time.perf_counter]
@@ -433,8 +456,9 @@ def singular_behaviour(robot: dhkin.Robot, poses: PoseSet,
 
 def measure(robot: dhkin.Robot, libraries: list[Library], generic: PoseSet, singular: PoseSet,
             runs: int, latency_poses: int) -> list[Row]:
-    """Quality from one batch of each set per library; timing round-robin: each run times every
-    library in turn (single calls, then the batch), so that all see the same machine state."""
+    """Quality from one batch of each set per library; timing per run: the libraries' single
+    calls interleaved pose by pose (:func:`timed_singles`), then each library's batch in turn,
+    so that all see the same machine state."""
     singular_results, sizes = [], []
     for library in libraries:
         print(f"{robot.name}: {library.name} ...", file=sys.stderr, flush=True)
@@ -448,8 +472,10 @@ def measure(robot: dhkin.Robot, libraries: list[Library], generic: PoseSet, sing
     rates: list[list[float]] = [[] for _ in libraries]
     results: list[Any] = [None] * len(libraries)
     for _ in range(runs):
+        counts = [min(latency_poses, size) for size in sizes]
+        for k, single in enumerate(timed_singles(libraries, counts)):
+            singles[k].append(single)
         for k, library in enumerate(libraries):
-            singles[k].append(timed_single(library, min(latency_poses, sizes[k]), 1))
             rate, results[k] = timed_batch(library, sizes[k], 1)
             rates[k].append(rate)
     rows = []

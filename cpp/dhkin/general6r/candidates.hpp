@@ -5,9 +5,10 @@
 // theta_k = lead + pi must be invertible: of the four angles shift + {0, 1, 2, 3} pi/2 the first
 // whose matrix is conditioned within kLeadCondition becomes lead (else the best of them), so
 // that no root lies at infinity unless all four are roots. The eigenvalues come from the
-// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp) where A is well
-// conditioned, else from QZ on the 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps
-// the eigenvalues of the regular part). Where no leading matrix is well conditioned, or a cluster holds more than kMaxSplit
+// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp; its eight spurious
+// eigenvalues +-i deflated, deflation.hpp) where A is well conditioned, else from QZ on the
+// 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps the eigenvalues of the regular
+// part). Where no leading matrix is well conditioned, or a cluster holds more than kMaxSplit
 // eigenvalues, the pose is solved moved (all_candidates), by QZ.
 #pragma once
 
@@ -157,8 +158,13 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   const Matrix12 B = stacked(2.0 * (Ps * cs - Pc * sn) * el.half2);
   const Matrix12 C = M_at(lead);
   Eigenvalues eigenvalues;
+  int count = kEigenvalues;
   if (best >= kLeadCondition && !moved) {
-    if (!companion_eigenvalues(A_inverse, B, C, eigenvalues)) return info;
+    // the spurious eigenvalues +-i deflated where that keeps the eigenvalues' error bound within
+    // the one allowed at kLeadCondition (deflation.hpp: the bound times its amplification)
+    count = companion_eigenvalues(A_inverse, B, C, el.has_spurious ? &el.spurious : nullptr,
+                                  best / kLeadCondition, eigenvalues);
+    if (count == 0) return info;
   } else {
     if (!solve_ill) return info;
     Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();
@@ -171,7 +177,7 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   // near-real eigenvalues as angles, sorted by the real part
   std::array<Angle, kEigenvalues> angles;
   int kept = 0;
-  for (int index = 0; index < kEigenvalues; ++index) {
+  for (int index = 0; index < count; ++index) {
     const std::complex<double> x = eigenvalues(index);
     const std::complex<double> angle =
         std::abs(x) > kInfinite ? std::complex<double>(kPi, 0.0) : 2.0 * std::atan(x);

@@ -1,0 +1,101 @@
+// The companion's eight spurious eigenvalues x = +-i removed before the eigenvalues
+// (docs/general6r.md, "Speed, seventh pass"): 24 x 24 -> 16 x 16.
+//
+// U (24 x 8, Elimination::spurious) spans the companion K's real invariant subspace for +-i at
+// every pose. The balanced companion D^-1 K D has the invariant subspace V = D^-1 U. With P the
+// 8 rows of V chosen by a pivoted QR (V_P invertible, as well conditioned as the greedy choice
+// makes it) and S the other 16, the similarity T = [[I, 0], [G, I]] (coordinates P, S;
+// G = V_S V_P^-1) has [I; G] = V V_P^-1 as its first columns, so T^-1 K T is block upper
+// triangular and its lower right block K_SS - G K_PS (16 x 16) holds the other 16 eigenvalues.
+// The update mixes no coordinates of different scale (an orthogonal complement of U, tried
+// before, undid the balancing and lost roots at nearly double eigenvalues).
+//
+// Its accuracy: with the companion's rounding E (~eps / the leading matrix's reciprocal
+// condition, relative), the deflated matrix carries E_SS - G E_PS, at most (1 + |G|) |E|, and an
+// eigenvalue's condition in it is at most (1 + |G|) times its condition in K (its right
+// eigenvector is x_S - G x_P, its left one y_S, and y_S . (x_S - G x_P) = y . x). So the
+// first-order error bound grows by at most amplification = (1 + |G|_F)^2.
+#pragma once
+
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+
+#include "dhkin/general6r/elimination.hpp"
+#include "dhkin/general6r/hessenberg_qr.hpp"
+
+namespace dhkin::general6r {
+
+// The size of the companion with the spurious eigenvalues deflated.
+constexpr int kDeflated = kEigenvalues - kSpurious;
+
+using Spurious = Eigen::Matrix<double, kEigenvalues, kSpurious>;
+using CompanionScale = Eigen::Matrix<double, kEigenvalues, 1>;
+
+namespace deflation_detail {
+
+using SpuriousRows = Eigen::Matrix<double, kEigenvalues, kSpurious, Eigen::RowMajor>;
+
+// The kSpurious rows of V chosen as a QR of V^T with column pivoting chooses its columns
+// (Businger and Golub): each time the row with the largest norm orthogonal to those already
+// chosen. Marks them in `pivot`.
+inline void pivot_rows(SpuriousRows W, std::array<bool, kEigenvalues>& pivot) {
+  pivot.fill(false);
+  for (int step = 0; step < kSpurious; ++step) {
+    int best = -1;
+    double largest = -1.0;
+    for (int i = 0; i < kEigenvalues; ++i) {
+      if (pivot[i]) continue;
+      const double norm = W.row(i).squaredNorm();
+      if (norm > largest) largest = norm, best = i;
+    }
+    pivot[best] = true;
+    if (largest == 0.0) continue;
+    const Eigen::Matrix<double, 1, kSpurious> direction = W.row(best) / std::sqrt(largest);
+    for (int i = 0; i < kEigenvalues; ++i) {
+      if (!pivot[i]) W.row(i) -= W.row(i).dot(direction) * direction;
+    }
+  }
+}
+
+}  // namespace deflation_detail
+
+// The deflated 16 x 16 of the balanced companion K (K = D^-1 K0 D, `scale` = D's diagonal; U
+// the invariant subspace of K0 for +-i) into the leading block of `deflated`. Returns the
+// amplification (1 + |G|_F)^2 of the eigenvalues' first-order error bound (NaN where V_P is
+// singular).
+inline double deflate_spurious(const Matrix24& K, const CompanionScale& scale, const Spurious& U,
+                               Matrix24& deflated) {
+  using namespace deflation_detail;
+  const SpuriousRows V = scale.cwiseInverse().asDiagonal() * U;
+  std::array<bool, kEigenvalues> pivot;
+  pivot_rows(V, pivot);
+  std::array<int, kSpurious> P;
+  std::array<int, kDeflated> S;
+  for (int i = 0, p = 0, s = 0; i < kEigenvalues; ++i) {
+    if (pivot[i]) {
+      P[p++] = i;
+    } else {
+      S[s++] = i;
+    }
+  }
+  Eigen::Matrix<double, kSpurious, kSpurious> V_P;
+  Eigen::Matrix<double, kDeflated, kSpurious> V_S;
+  for (int p = 0; p < kSpurious; ++p) V_P.row(p) = V.row(P[p]);
+  for (int s = 0; s < kDeflated; ++s) V_S.row(s) = V.row(S[s]);
+  // G^T = V_P^-T V_S^T
+  const Eigen::Matrix<double, kSpurious, kDeflated> G_transposed =
+      V_P.transpose().partialPivLu().solve(V_S.transpose());
+  Eigen::Matrix<double, kSpurious, kDeflated> K_PS;
+  for (int p = 0; p < kSpurious; ++p) {
+    for (int s = 0; s < kDeflated; ++s) K_PS(p, s) = K(P[p], S[s]);
+  }
+  for (int c = 0; c < kDeflated; ++c) {
+    for (int r = 0; r < kDeflated; ++r) deflated(r, c) = K(S[r], S[c]);
+  }
+  deflated.topLeftCorner<kDeflated, kDeflated>().noalias() -= G_transposed.transpose() * K_PS;
+  const double growth = 1.0 + G_transposed.norm();
+  return growth * growth;
+}
+
+}  // namespace dhkin::general6r

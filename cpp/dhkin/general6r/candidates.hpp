@@ -31,6 +31,17 @@ namespace dhkin::general6r {
 // The leading matrix is accepted when its reciprocal condition (1-norm) is at least this: the
 // eigenvalues then lose at most ~1e-8 relative to rounding, well within Newton's basin.
 constexpr double kLeadCondition = 1e-8;
+// The companion's spurious eigenvalues +-i are deflated (deflation.hpp) only where its leading
+// matrix is conditioned within this, three orders better than kLeadCondition. On random poses the
+// deflated eigenvalues are as accurate as the 24 x 24's (the same largest errors within each band
+// of the leading condition; docs/general6r.md, "Speed, seventh pass"), but on a pose's worst they
+// lost up to three digits more (per-pose error ratios up to 1.2e3), and at an HC10 pose whose four
+// leading matrices were all conditioned at 1e-8 .. 3e-8 (four nearly double eigenvalues, whose
+// computed copies scatter by ~1e-3 in either matrix) the deflated copies of one fell 2.4e-3 apart,
+// beyond kCluster, and a root was lost. Three lost digits at this condition leave the eigenvalues
+// within the error the 24 x 24 is allowed at kLeadCondition. A pose whose first leading matrix is
+// conditioned within kLeadCondition but not this one tries the other three for one that is.
+constexpr double kDeflationCondition = 1e3 * kLeadCondition;
 // Eigenvalues of the eliminated joint whose angles (rad, real parts) lie closer than this are
 // one cluster, split at each member into as many starts as the cluster has members. Taking two
 // eigenvalues together costs starts, never roots (each member's own null vector is in its
@@ -142,15 +153,22 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   const auto M_at = [&](double angle) {
     return stacked((Pc * std::cos(angle) + Ps * std::sin(angle) + P1) * el.half2);
   };
-  // leading matrix: the first of M at four angles conditioned within kLeadCondition
+  // leading matrix: the first of M at four angles conditioned within kDeflationCondition (its
+  // companion deflated), else the first conditioned within kLeadCondition, else the best of them
   double best = -1.0, lead = el.shift;
   Matrix12 A, A_inverse, inverse_here;
+  bool accepted = false, deflate = false;
   for (int quarter = 0; quarter < 4; ++quarter) {
     const double angle = el.shift + quarter * 0.5 * kPi;
     const Matrix12 M = M_at(angle + kPi);
     const double ratio = reciprocal_condition(M, inverse_here);
-    if (ratio > best) best = ratio, lead = angle, A = M, A_inverse = inverse_here;
-    if (ratio >= kLeadCondition) break;
+    if (el.has_spurious && !moved && ratio >= kDeflationCondition) {
+      best = ratio, lead = angle, A = M, A_inverse = inverse_here, deflate = true;
+      break;
+    }
+    if (!accepted && ratio > best) best = ratio, lead = angle, A = M, A_inverse = inverse_here;
+    accepted = accepted || ratio >= kLeadCondition;
+    if (accepted && (!el.has_spurious || moved)) break;
   }
   info.lead_condition = best;
   // B and C of M(x) = A x^2 + B x + C with theta_k = lead + 2 atan(x)
@@ -160,10 +178,7 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   Eigenvalues eigenvalues;
   int count = kEigenvalues;
   if (best >= kLeadCondition && !moved) {
-    // the spurious eigenvalues +-i deflated where that keeps the eigenvalues' error bound within
-    // the one allowed at kLeadCondition (deflation.hpp: the bound times its amplification)
-    count = companion_eigenvalues(A_inverse, B, C, el.has_spurious ? &el.spurious : nullptr,
-                                  best / kLeadCondition, eigenvalues);
+    count = companion_eigenvalues(A_inverse, B, C, deflate ? &el.spurious : nullptr, eigenvalues);
     if (count == 0) return info;
   } else {
     if (!solve_ill) return info;

@@ -10,11 +10,13 @@
 // The update mixes no coordinates of different scale (an orthogonal complement of U, tried
 // before, undid the balancing and lost roots at nearly double eigenvalues).
 //
-// Its accuracy: with the companion's rounding E (~eps / the leading matrix's reciprocal
-// condition, relative), the deflated matrix carries E_SS - G E_PS, at most (1 + |G|) |E|, and an
-// eigenvalue's condition in it is at most (1 + |G|) times its condition in K (its right
-// eigenvector is x_S - G x_P, its left one y_S, and y_S . (x_S - G x_P) = y . x). So the
-// first-order error bound grows by at most amplification = (1 + |G|_F)^2.
+// Its accuracy: with the companion's rounding E, the deflated matrix carries E_SS - G E_PS, at
+// most (1 + |G|) |E|, and an eigenvalue's condition in it is at most (1 + |G|) times its condition
+// in K (its right eigenvector is x_S - G x_P, its left one y_S, and y_S . (x_S - G x_P) = y . x).
+// That first-order bound does not tell where it loses digits (|G| stays below 4 on random poses,
+// and was 0.005 at the HC10 pose that lost a root; docs/general6r.md, "Speed, seventh pass"):
+// candidates.hpp deflates only where the leading matrix is conditioned within
+// kDeflationCondition.
 #pragma once
 
 #include <Eigen/Dense>
@@ -61,11 +63,10 @@ inline void pivot_rows(SpuriousRows W, std::array<bool, kEigenvalues>& pivot) {
 }  // namespace deflation_detail
 
 // The deflated 16 x 16 of the balanced companion K (K = D^-1 K0 D, `scale` = D's diagonal; U
-// the invariant subspace of K0 for +-i) into the leading block of `deflated`. Returns the
-// amplification (1 + |G|_F)^2 of the eigenvalues' first-order error bound (NaN where V_P is
-// singular).
-inline double deflate_spurious(const Matrix24& K, const CompanionScale& scale, const Spurious& U,
-                               Matrix24& deflated) {
+// the invariant subspace of K0 for +-i) into the leading block of `deflated`; false where V_P is
+// singular (G not finite).
+inline bool deflate_spurious(const Matrix24& K, const CompanionScale& scale, const Spurious& U,
+                             Matrix24& deflated) {
   using namespace deflation_detail;
   const SpuriousRows V = scale.cwiseInverse().asDiagonal() * U;
   std::array<bool, kEigenvalues> pivot;
@@ -86,6 +87,7 @@ inline double deflate_spurious(const Matrix24& K, const CompanionScale& scale, c
   // G^T = V_P^-T V_S^T
   const Eigen::Matrix<double, kSpurious, kDeflated> G_transposed =
       V_P.transpose().partialPivLu().solve(V_S.transpose());
+  if (!G_transposed.allFinite()) return false;
   Eigen::Matrix<double, kSpurious, kDeflated> K_PS;
   for (int p = 0; p < kSpurious; ++p) {
     for (int s = 0; s < kDeflated; ++s) K_PS(p, s) = K(P[p], S[s]);
@@ -94,8 +96,7 @@ inline double deflate_spurious(const Matrix24& K, const CompanionScale& scale, c
     for (int r = 0; r < kDeflated; ++r) deflated(r, c) = K(S[r], S[c]);
   }
   deflated.topLeftCorner<kDeflated, kDeflated>().noalias() -= G_transposed.transpose() * K_PS;
-  const double growth = 1.0 + G_transposed.norm();
-  return growth * growth;
+  return true;
 }
 
 }  // namespace dhkin::general6r

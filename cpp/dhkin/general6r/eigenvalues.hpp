@@ -104,12 +104,10 @@ inline void balance_matrix(Matrix24& H, int n) {
 
 // The eigenvalues of the companion of M(x) = A x^2 + B x + C (A_inverse = A^-1) into out; returns
 // how many (kDeflated where the spurious eigenvalues +-i were deflated, else kEigenvalues), 0
-// where the QR iteration does not converge. `spurious` (null: none) is the table's invariant
-// subspace for +-i; the deflation is taken where its amplification of the eigenvalues' error
-// bound (deflation.hpp) is at most `allowed_amplification`, else the whole 24 x 24 is solved.
+// where the QR iteration does not converge. `spurious` (null: the whole 24 x 24) is the table's
+// invariant subspace for +-i (the whole 24 x 24 also where its pivot rows are singular).
 inline int companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, const Matrix12& C,
-                                 const Spurious* spurious, double allowed_amplification,
-                                 Eigenvalues& out) {
+                                 const Spurious* spurious, Eigenvalues& out) {
   Matrix24 K = Matrix24::Zero();
   K.topRightCorner<kMonomials, kMonomials>().setIdentity();
   K.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
@@ -118,8 +116,7 @@ inline int companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, c
   eigenvalues_detail::balance_companion(K, scale);
   if (spurious != nullptr) {
     Matrix24 deflated;
-    const double amplification = deflate_spurious(K, scale, *spurious, deflated);
-    if (amplification <= allowed_amplification) {
+    if (deflate_spurious(K, scale, *spurious, deflated)) {
       eigenvalues_detail::balance_matrix(deflated, kDeflated);
       reduce_to_hessenberg(deflated, kDeflated);
       return hessenberg_eigenvalues(deflated, kDeflated, out) ? kDeflated : 0;

@@ -33,6 +33,20 @@ constexpr double kRadix = 2.0;
 // A row and column pair is rescaled when that shrinks their combined norm below this fraction.
 constexpr double kBalanceGain = 0.95;
 
+// Row and column i of the leading n x n block of H rescaled by a power of two where that brings
+// their off-diagonal norms `column` and `row` (both nonzero) to comparable size and shrinks their
+// sum below kBalanceGain of what it was; returns the factor (1: left as they were).
+inline double rescale(Matrix24& H, int n, int i, double column, double row) {
+  const double total = column + row;
+  double factor = 1.0;
+  for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
+  for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
+  if (!((column + row) / factor < kBalanceGain * total)) return 1.0;
+  for (int j = 0; j < n; ++j) H(i, j) /= factor;
+  for (int j = 0; j < n; ++j) H(j, i) *= factor;
+  return factor;
+}
+
 // The companion K = [[0, I], [X, Y]] (24 x 24) balanced in place by a diagonal similarity
 // D^-1 K D (Parlett and Reinsch, as LAPACK's dgebal, which dgeev runs first): each row and its
 // column brought to comparable norms by powers of two; D's diagonal into `scale`. The eigenvalues
@@ -62,16 +76,8 @@ inline void balance_companion(Matrix24& K, CompanionScale& scale) {
         }
       }
       if (column == 0.0 || row == 0.0) continue;
-      const double total = column + row;
-      double factor = 1.0;
-      for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
-      for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
-      if ((column + row) / factor < kBalanceGain * total) {
-        done = false;
-        scale(i) *= factor;
-        for (int j = 0; j < n; ++j) K(i, j) /= factor;
-        for (int j = 0; j < n; ++j) K(j, i) *= factor;
-      }
+      const double factor = rescale(K, n, i, column, row);
+      if (factor != 1.0) done = false, scale(i) *= factor;
     }
   }
 }
@@ -87,15 +93,7 @@ inline void balance_matrix(Matrix24& H, int n) {
         if (j != i) column += std::abs(H(j, i)), row += std::abs(H(i, j));
       }
       if (column == 0.0 || row == 0.0) continue;
-      const double total = column + row;
-      double factor = 1.0;
-      for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
-      for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
-      if ((column + row) / factor < kBalanceGain * total) {
-        done = false;
-        for (int j = 0; j < n; ++j) H(i, j) /= factor;
-        for (int j = 0; j < n; ++j) H(j, i) *= factor;
-      }
+      if (rescale(H, n, i, column, row) != 1.0) done = false;
     }
   }
 }

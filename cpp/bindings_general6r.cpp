@@ -96,6 +96,15 @@ g6::Elimination elimination_from(const nb::dict& f) {
   el.reversed = field(f, "reversed", 1)[0] != 0.0;
   el.scale = field(f, "scale", 1)[0];
   el.band = field(f, "band", 1)[0];
+  const auto spurious = field(f, "spurious");
+  if (spurious.size() == static_cast<std::size_t>(g6::kEigenvalues * g6::kSpurious)) {
+    for (int r = 0; r < g6::kEigenvalues; ++r) {
+      for (int c = 0; c < g6::kSpurious; ++c) el.spurious(r, c) = spurious[g6::kSpurious * r + c];
+    }
+    el.has_spurious = true;
+  } else if (!spurious.empty()) {
+    throw std::invalid_argument("field spurious: expected 24 x 8 values or none");
+  }
   el.direction = joints_of(field(f, "direction", kDof));
   el.offset = joints_of(field(f, "offset", kDof));
   return el;

@@ -376,6 +376,26 @@ def test_nearly_double_eigenvalue_keeps_both_roots(name: str, q: list[float]) ->
     assert len(answer) % 2 == 0
 
 
+def test_deflation_kept_off_at_the_leading_condition() -> None:
+    """At an HC10 pose (scripts/compare_builds.py's sample 4445) every leading matrix is
+    conditioned at 1e-8 .. 3e-8 and four eigenvalues are nearly double (roots 3e-5 to 9e-5 rad
+    apart in q2): the companion with its spurious eigenvalues +-i deflated put one pair's
+    copies 2.4e-3 rad apart, beyond kCluster, and lost a root (candidates.hpp,
+    kDeflationCondition); unseeded, every root of the multistart reference comes back."""
+    from dhkin.validation.multistart import RootReference, missing_roots
+    from dhkin.validation.references import ReferenceSpec, TargetModel
+
+    robot = dhkin.load("motoman_hc10")
+    model = TargetModel(ReferenceSpec(kind="exact"), robot.reference())
+    q = np.array([1.7237244375179364, 1.7191605905125185, 6.07845360793609,
+                  -1.9076647940283957, 2.8273094626327593, 0.5648040965542207])
+    T = model.fk(q)
+    roots = RootReference(robot, model, starts=2000).roots(T, DEFAULT_TOLERANCE)
+    answer = robot.ik(T)
+    assert len(roots) == 8
+    assert not missing_roots(model, T, roots, answer.q, DEFAULT_TOLERANCE, SAME)
+
+
 def test_shared_eigenvalues_are_split_into_each_root() -> None:
     """The cause of the lost roots: at q = (0, 0, 0, -90, 90, 180) deg four of the CRX-10iA's
     eight roots share the eliminated joint's value; the null space of M there is split into

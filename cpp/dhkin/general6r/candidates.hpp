@@ -5,9 +5,10 @@
 // theta_k = lead + pi must be invertible: of the four angles shift + {0, 1, 2, 3} pi/2 the first
 // whose matrix is conditioned within kLeadCondition becomes lead (else the best of them), so
 // that no root lies at infinity unless all four are roots. The eigenvalues come from the
-// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp) where A is well
-// conditioned, else from QZ on the 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps
-// the eigenvalues of the regular part). Where no leading matrix is well conditioned, or a cluster holds more than kMaxSplit
+// companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp; its eight spurious
+// eigenvalues +-i deflated, deflation.hpp) where A is well conditioned, else from QZ on the
+// 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps the eigenvalues of the regular
+// part). Where no leading matrix is well conditioned, or a cluster holds more than kMaxSplit
 // eigenvalues, the pose is solved moved (all_candidates), by QZ.
 #pragma once
 
@@ -30,6 +31,17 @@ namespace dhkin::general6r {
 // The leading matrix is accepted when its reciprocal condition (1-norm) is at least this: the
 // eigenvalues then lose at most ~1e-8 relative to rounding, well within Newton's basin.
 constexpr double kLeadCondition = 1e-8;
+// The companion's spurious eigenvalues +-i are deflated (deflation.hpp) only where its leading
+// matrix is conditioned within this, three orders better than kLeadCondition. On random poses the
+// deflated eigenvalues are as accurate as the 24 x 24's (the same largest errors within each band
+// of the leading condition; docs/general6r.md, "Speed, seventh pass"), but on a pose's worst they
+// lost up to three digits more (per-pose error ratios up to 1.2e3), and at an HC10 pose whose four
+// leading matrices were all conditioned at 1e-8 .. 3e-8 (four nearly double eigenvalues, whose
+// computed copies scatter by ~1e-3 in either matrix) the deflated copies of one fell 2.4e-3 apart,
+// beyond kCluster, and a root was lost. Three lost digits at this condition leave the eigenvalues
+// within the error the 24 x 24 is allowed at kLeadCondition. A pose whose first leading matrix is
+// conditioned within kLeadCondition but not this one tries the other three for one that is.
+constexpr double kDeflationCondition = 1e3 * kLeadCondition;
 // Eigenvalues of the eliminated joint whose angles (rad, real parts) lie closer than this are
 // one cluster, split at each member into as many starts as the cluster has members. Taking two
 // eigenvalues together costs starts, never roots (each member's own null vector is in its
@@ -141,15 +153,22 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   const auto M_at = [&](double angle) {
     return stacked((Pc * std::cos(angle) + Ps * std::sin(angle) + P1) * el.half2);
   };
-  // leading matrix: the first of M at four angles conditioned within kLeadCondition
+  // leading matrix: the first of M at four angles conditioned within kDeflationCondition (its
+  // companion deflated), else the first conditioned within kLeadCondition, else the best of them
   double best = -1.0, lead = el.shift;
   Matrix12 A, A_inverse, inverse_here;
+  bool accepted = false, deflate = false;
   for (int quarter = 0; quarter < 4; ++quarter) {
     const double angle = el.shift + quarter * 0.5 * kPi;
     const Matrix12 M = M_at(angle + kPi);
     const double ratio = reciprocal_condition(M, inverse_here);
-    if (ratio > best) best = ratio, lead = angle, A = M, A_inverse = inverse_here;
-    if (ratio >= kLeadCondition) break;
+    if (el.has_spurious && !moved && ratio >= kDeflationCondition) {
+      best = ratio, lead = angle, A = M, A_inverse = inverse_here, deflate = true;
+      break;
+    }
+    if (!accepted && ratio > best) best = ratio, lead = angle, A = M, A_inverse = inverse_here;
+    accepted = accepted || ratio >= kLeadCondition;
+    if (accepted && (!el.has_spurious || moved)) break;
   }
   info.lead_condition = best;
   // B and C of M(x) = A x^2 + B x + C with theta_k = lead + 2 atan(x)
@@ -157,8 +176,10 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   const Matrix12 B = stacked(2.0 * (Ps * cs - Pc * sn) * el.half2);
   const Matrix12 C = M_at(lead);
   Eigenvalues eigenvalues;
+  int count = kEigenvalues;
   if (best >= kLeadCondition && !moved) {
-    if (!companion_eigenvalues(A_inverse, B, C, eigenvalues)) return info;
+    count = companion_eigenvalues(A_inverse, B, C, deflate ? &el.spurious : nullptr, eigenvalues);
+    if (count == 0) return info;
   } else {
     if (!solve_ill) return info;
     Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();
@@ -171,7 +192,7 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
   // near-real eigenvalues as angles, sorted by the real part
   std::array<Angle, kEigenvalues> angles;
   int kept = 0;
-  for (int index = 0; index < kEigenvalues; ++index) {
+  for (int index = 0; index < count; ++index) {
     const std::complex<double> x = eigenvalues(index);
     const std::complex<double> angle =
         std::abs(x) > kInfinite ? std::complex<double>(kPi, 0.0) : 2.0 * std::atan(x);

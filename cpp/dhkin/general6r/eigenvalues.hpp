@@ -1,7 +1,8 @@
 // The eigenvalues of the general 6R elimination's companion matrix and pencil.
 //
 // The companion K = [[0, I], [X, Y]] (X = -A^-1 C, Y = -A^-1 B, 24 x 24), balanced (as
-// LAPACK's dgeev does first), reduced to Hessenberg form, then Francis's double-shift QR,
+// LAPACK's dgeev does first), its eight spurious eigenvalues +-i deflated (deflation.hpp; the
+// 16 x 16 balanced again), reduced to Hessenberg form, then Francis's double-shift QR,
 // eigenvalues only (hessenberg_qr.hpp). A pencil: Eigen's real QZ (GeneralizedEigenSolver) on the
 // whole 24 x 24.
 #pragma once
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <complex>
 
+#include "dhkin/general6r/deflation.hpp"
 #include "dhkin/general6r/elimination.hpp"
 #include "dhkin/general6r/hessenberg_qr.hpp"
 #include "dhkin/general6r/qz_shifts.hpp"
@@ -31,16 +33,32 @@ constexpr double kRadix = 2.0;
 // A row and column pair is rescaled when that shrinks their combined norm below this fraction.
 constexpr double kBalanceGain = 0.95;
 
+// Row and column i of the leading n x n block of H rescaled by a power of two where that brings
+// their off-diagonal norms `column` and `row` (both nonzero) to comparable size and shrinks their
+// sum below kBalanceGain of what it was; returns the factor (1: left as they were).
+inline double rescale(Matrix24& H, int n, int i, double column, double row) {
+  const double total = column + row;
+  double factor = 1.0;
+  for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
+  for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
+  if (!((column + row) / factor < kBalanceGain * total)) return 1.0;
+  for (int j = 0; j < n; ++j) H(i, j) /= factor;
+  for (int j = 0; j < n; ++j) H(j, i) *= factor;
+  return factor;
+}
+
 // The companion K = [[0, I], [X, Y]] (24 x 24) balanced in place by a diagonal similarity
 // D^-1 K D (Parlett and Reinsch, as LAPACK's dgebal, which dgeev runs first): each row and its
-// column brought to comparable norms by powers of two. The eigenvalues are K's; their computed
-// accuracy is not: the companion of a badly scaled M(x) unbalanced lost two real roots 5.5e-11
-// apart (a CRX-10iA pose at a joint limit) into one complex pair, balanced it keeps them apart.
-// A diagonal similarity keeps K's zero blocks zero, so the norms skip them: row i < 12 holds
-// only K(i, 12 + i), column i < 12 only rows 12 ..; column i >= 12 row i - 12 and rows 12 ..
-// (each sum in the order of the whole row or column: adding zeros is exact, the same bits).
-inline void balance_companion(Matrix24& K) {
+// column brought to comparable norms by powers of two; D's diagonal into `scale`. The eigenvalues
+// are K's; their computed accuracy is not: the companion of a badly scaled M(x) unbalanced lost
+// two real roots 5.5e-11 apart (a CRX-10iA pose at a joint limit) into one complex pair, balanced
+// it keeps them apart. A diagonal similarity keeps K's zero blocks zero, so the norms skip them:
+// row i < 12 holds only K(i, 12 + i), column i < 12 only rows 12 ..; column i >= 12 row i - 12
+// and rows 12 .. (each sum in the order of the whole row or column: adding zeros is exact, the
+// same bits).
+inline void balance_companion(Matrix24& K, CompanionScale& scale) {
   constexpr int n = kEigenvalues, half = kMonomials;
+  scale.setOnes();
   for (bool done = false; !done;) {
     done = true;
     for (int i = 0; i < n; ++i) {
@@ -58,42 +76,52 @@ inline void balance_companion(Matrix24& K) {
         }
       }
       if (column == 0.0 || row == 0.0) continue;
-      const double total = column + row;
-      double factor = 1.0;
-      for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
-      for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
-      if ((column + row) / factor < kBalanceGain * total) {
-        done = false;
-        for (int j = 0; j < n; ++j) K(i, j) /= factor;
-        for (int j = 0; j < n; ++j) K(j, i) *= factor;
+      const double factor = rescale(K, n, i, column, row);
+      if (factor != 1.0) done = false, scale(i) *= factor;
+    }
+  }
+}
+
+// The leading n x n block of H balanced in place as balance_companion does, every entry counted
+// (the deflated companion has no zero blocks).
+inline void balance_matrix(Matrix24& H, int n) {
+  for (bool done = false; !done;) {
+    done = true;
+    for (int i = 0; i < n; ++i) {
+      double column = 0.0, row = 0.0;
+      for (int j = 0; j < n; ++j) {
+        if (j != i) column += std::abs(H(j, i)), row += std::abs(H(i, j));
       }
+      if (column == 0.0 || row == 0.0) continue;
+      if (rescale(H, n, i, column, row) != 1.0) done = false;
     }
   }
 }
 
 }  // namespace eigenvalues_detail
 
-// The eigenvalues of the companion K (balanced in place first, then destroyed) into out; false
-// where the QR iteration does not converge.
-inline bool matrix_eigenvalues(Matrix24& K, Eigenvalues& out) {
-  eigenvalues_detail::balance_companion(K);
-  reduce_to_hessenberg(K, kEigenvalues);
-  return hessenberg_eigenvalues(K, kEigenvalues, out);
-}
-
-// The eigenvalues of the companion of M(x) = A x^2 + B x + C (A_inverse = A^-1) into out; false
-// where the QR iteration does not converge. The whole 24 x 24 companion is solved, its eigenvalues
-// +-i included (docs/general6r.md, "Speed": deflating them by a constant orthogonal basis, 16 x
-// 16, undid the balancing, whose diagonal similarity is the pose's: on an HC10DT pose the deflated
-// matrix's norm was 1e6 against 47 balanced, and a nearly double eigenvalue, two roots 1e-6 rad
-// apart, scattered by 6e-4 rad and a root was lost).
-inline bool companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, const Matrix12& C,
-                                  Eigenvalues& out) {
+// The eigenvalues of the companion of M(x) = A x^2 + B x + C (A_inverse = A^-1) into out; returns
+// how many (kDeflated where the spurious eigenvalues +-i were deflated, else kEigenvalues), 0
+// where the QR iteration does not converge. `spurious` (null: the whole 24 x 24) is the table's
+// invariant subspace for +-i (the whole 24 x 24 also where its pivot rows are singular).
+inline int companion_eigenvalues(const Matrix12& A_inverse, const Matrix12& B, const Matrix12& C,
+                                 const Spurious* spurious, Eigenvalues& out) {
   Matrix24 K = Matrix24::Zero();
   K.topRightCorner<kMonomials, kMonomials>().setIdentity();
   K.bottomLeftCorner<kMonomials, kMonomials>() = -A_inverse * C;
   K.bottomRightCorner<kMonomials, kMonomials>() = -A_inverse * B;
-  return matrix_eigenvalues(K, out);
+  CompanionScale scale;
+  eigenvalues_detail::balance_companion(K, scale);
+  if (spurious != nullptr) {
+    Matrix24 deflated;
+    if (deflate_spurious(K, scale, *spurious, deflated)) {
+      eigenvalues_detail::balance_matrix(deflated, kDeflated);
+      reduce_to_hessenberg(deflated, kDeflated);
+      return hessenberg_eigenvalues(deflated, kDeflated, out) ? kDeflated : 0;
+    }
+  }
+  reduce_to_hessenberg(K, kEigenvalues);
+  return hessenberg_eigenvalues(K, kEigenvalues, out) ? kEigenvalues : 0;
 }
 
 // The eigenvalues of the pencil L - x R (an infinite one, beta = 0, as infinity); false where QZ

@@ -31,6 +31,10 @@ constexpr int kMonomials = 12;
 // Eigenvalues of the companion of M(x) = A x^2 + B x + C.
 constexpr int kEigenvalues = 2 * kMonomials;
 
+// The companion's spurious eigenvalues x = +-i (Raghavan and Roth's extraneous factor
+// (1 + x^2)^4 of the determinant): the same at every pose, deflated before the eigenvalues.
+constexpr int kSpurious = 8;
+
 using Matrix12 = Eigen::Matrix<double, kMonomials, kMonomials>;
 using Vector12 = Eigen::Matrix<double, kMonomials, 1>;
 // The equations of one side, over the products of the two joints after the eliminated one.
@@ -86,6 +90,11 @@ struct Elimination {
   bool reversed = false;     // the model runs tip to base
   double scale = 1.0;        // the model's length unit (m)
   double band = 0.1;         // largest imaginary part of an eigenvalue's angle taken (rad)
+  // An orthonormal basis of the companion's real invariant subspace for x = +-i
+  // (general6r_elimination.Elimination.spurious_subspace), where the table has one.
+  Eigen::Matrix<double, kEigenvalues, kSpurious> spurious =
+      Eigen::Matrix<double, kEigenvalues, kSpurious>::Zero();
+  bool has_spurious = false;
   Joints direction{}, offset{};  // v_j = direction_j q_j + offset_j (the table's joints)
 
   // URDF joint values of the model angles theta.

@@ -140,7 +140,8 @@ class General6RSolver:
             "D0_inverse": _inverse(model.D0), "E_inverse": _inverse(model.E),
             "shift": elimination.shift, "k": elimination.k,
             "reversed": float(arrangement.reversed), "scale": model.scale,
-            "band": IMAGINARY_BAND, "direction": self.direction, "offset": self.offset}
+            "band": IMAGINARY_BAND, "direction": self.direction, "offset": self.offset,
+            "spurious": elimination.spurious_subspace()}
 
     def compiled_candidates(self, T_dh: NDArray[np.float64], core: Any = None
                             ) -> NDArray[np.float64]:

@@ -42,6 +42,8 @@ _V_INV = np.linalg.inv(_V)
 #: (cos, sin, 1) of a half-angle x, times (1 + x^2), as coefficients of (1, x, x^2).
 _HALF = np.array([[1.0, 0.0, -1.0], [0.0, 2.0, 0.0], [1.0, 0.0, 1.0]])
 _HALF2 = np.kron(_HALF, _HALF)
+#: Null vectors of M(+-i) at every pose: the extraneous factor (1 + x^2)^4 of the determinant.
+SPURIOUS_NULL = 4
 
 
 def quantities(axis: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -100,6 +102,33 @@ class Elimination:
         self._inverses = {j: [_inverse_row(t, *self.rows[j]) for t in SAMPLES]
                           for j in self.right_joints}
         self._dropped_inverse = _inverse_row(0.0, *self.rows[self.dropped])
+
+    def spurious_subspace(self) -> NDArray[np.float64]:
+        """An orthonormal basis (24, 8) of the companion's real invariant subspace for its eight
+        eigenvalues x = +-i, the same at every pose; (0, 8) where the table has not exactly four
+        null vectors there (its 24 x 24 companion is then solved whole).
+
+        At x = i, M(i) = 2 e^(-i shift') N S with S the stacked (P_c + i P_s) half2 (28 x 12; P_1
+        and the pose's right side drop out with the factor 1 + x^2), so each null vector z = X +
+        i Y of S gives the companion [[0, I], [-A^-1 C, -A^-1 B]] the eigenvector [z; i z] at
+        x = i and its conjugate at -i, whatever the pose and the lead: real invariant subspace
+        [[X, Y], [-Y, X]] (Raghavan and Roth's extraneous factor (1 + x^2)^4: four null
+        vectors). Null singular values are at the rounding (<= 3e-15 of |S| ~ 15 on the
+        built-in arms), the others at least 0.04 |S|: the cut at sqrt(eps) |S| separates them.
+        """
+        S_half = (self.P[0] + 1j * self.P[1]) @ _HALF2  # (14, 9)
+        S = np.zeros((28, 12), dtype=complex)
+        S[:14, :9] = S_half
+        S[14:, 3:] = S_half
+        _, s, vh = np.linalg.svd(S)
+        null = int(np.sum(s <= s[0] * math.sqrt(np.finfo(float).eps)))
+        if null != SPURIOUS_NULL:
+            return np.zeros((0, 2 * SPURIOUS_NULL))
+        Z = vh[-null:].conj().T  # (12, 4)
+        X, Y = Z.real, Z.imag
+        U = np.block([[X, Y], [-Y, X]])  # (24, 8)
+        basis, _ = np.linalg.qr(U)
+        return np.ascontiguousarray(basis)
 
     def right_side(self, H: NDArray[np.float64], samples: tuple[int, int]) -> NDArray[np.float64]:
         """The right side at the sample angles of its two joints (indices into SAMPLES)."""

@@ -11,6 +11,7 @@
 
 #include "dhkin/general6r/answer.hpp"
 #include "dhkin/general6r/candidates.hpp"
+#include "dhkin/general6r/crossings.hpp"
 #include "dhkin/general6r/roots.hpp"
 #include "dhkin/general6r/valley.hpp"
 #include "dhkin/pose.hpp"
@@ -153,6 +154,7 @@ inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh
     keep_values(starts);
   }
   valley_roots(tip.chain, tip_target, verification, tip.lever, band, start_values, roots);
+  crossing_roots(tip.chain, tip_target, verification, tip.lever, band, roots);
   return failed;
 }
 

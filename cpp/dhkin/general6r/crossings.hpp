@@ -30,11 +30,17 @@
 
 namespace dhkin::general6r {
 
-// Golden-section steps locating a crossing between the two points beside the traced point
-// nearest it (at most 2 kValleyStep apart): each step keeps 0.618 of the bracket, and 0.2 rad
-// shrinks to the tolerance (1e-9 rad) in log(2e8) / log(1.618) = 40 steps.
-constexpr int kCrossingIterations = 40;
-// The golden section's ratio (3 - sqrt(5)) / 2: the inner points lie at it and 1 - it.
+// Steps locating a crossing between the two points beside the traced point nearest it. The
+// second singular value along the curve is |lambda| of a smooth lambda that vanishes at the
+// crossing: a V of equal slopes, whose bottom the V through three points of it puts within the
+// square of their spread (as the secant method converges). A true crossing comes down to the
+// singular value's rounding (~1e-10 .. 1e-8 on the M-430iA/2P's and the HC10's) within two to
+// four such steps, where the V's next bottom is no lower; the cap gives up a minimum that
+// does not reach zero (no crossing; 12 golden-section steps, taken where the V's bottom falls
+// outside its side, would shrink its bracket to 0.618^12 = 3e-3 of its length).
+constexpr int kCrossingIterations = 12;
+// A golden-section step's ratio (3 - sqrt(5)) / 2, where the V's bottom falls outside the side
+// it was drawn for.
 constexpr double kGolden = 0.3819660112501051;
 
 // A point of a curve of solutions: its tangent (the Jacobian's weakest right singular vector,
@@ -82,32 +88,62 @@ inline CurvePoint on_chords(const Chain& chain, const Frame& target, const Joint
 }
 
 // The crossing beside `middle` (a traced point whose second singular value is below both its
-// neighbours'): the V's bottom by golden section along the chords through the three, to within
-// the tolerance (rad) of arc.
+// neighbours'), along the chords through the three (arc x from `before`): each step draws the V
+// of equal slopes through the lowest point and the one beyond it on either side, and evaluates
+// its bottom (where that falls on its own side; else a golden-section step into the longer
+// side); done where the bottom lies within the tolerance (rad) of the lowest point, or, that
+// point's value within the band, is no lower than it.
 inline CurvePoint locate_crossing(const Chain& chain, const Frame& target,
                                   const CurvePoint& before, const CurvePoint& middle,
                                   const CurvePoint& after, double tolerance, double lever,
                                   double band) {
-  const double length = joint_distance(before.q, middle.q) + joint_distance(middle.q, after.q);
-  double low = 0.0, high = 2.0;
-  const auto at = [&](double s) {
+  const double d1 = joint_distance(before.q, middle.q), d2 = joint_distance(middle.q, after.q);
+  const auto at = [&](double x) {
+    const double s = x <= d1 ? x / d1 : 1.0 + (x - d1) / d2;
     return on_chords(chain, target, before.q, middle.q, after.q, s, lever, band, middle.tangent);
   };
-  double s1 = low + kGolden * (high - low), s2 = high - kGolden * (high - low);
-  CurvePoint p1 = at(s1), p2 = at(s2);
+  double xl = 0.0, xm = d1, xh = d1 + d2, fl = before.second, fh = after.second;
+  CurvePoint lowest = middle;
   for (int iteration = 0; iteration < kCrossingIterations; ++iteration) {
-    if (0.5 * (high - low) * length <= tolerance) break;
-    if (p1.second <= p2.second) {
-      high = s2, s2 = s1, p2 = p1;
-      s1 = low + kGolden * (high - low);
-      p1 = at(s1);
+    const double fm = lowest.second;
+    const double right_slope = (fh - fm) / (xh - xm), left_slope = (fl - fm) / (xm - xl);
+    // the bottom left of the lowest point (the V's right branch through it and the point
+    // beyond), or right of it
+    const double left_bottom = right_slope > 0.0 ? xm - fm / right_slope : NAN;
+    const double right_bottom = left_slope > 0.0 ? xm + fm / left_slope : NAN;
+    const bool left_side = left_bottom > xl && left_bottom < xm;
+    const bool right_side = right_bottom > xm && right_bottom < xh;
+    double x;
+    const bool drawn = left_side || right_side;
+    if (left_side && right_side) {
+      // the V that passes nearer the point on its far branch
+      const double left_miss = std::abs(fl - right_slope * (left_bottom - xl));
+      const double right_miss = std::abs(fh - left_slope * (xh - right_bottom));
+      x = left_miss <= right_miss ? left_bottom : right_bottom;
+    } else if (drawn) {
+      x = left_side ? left_bottom : right_bottom;
     } else {
-      low = s1, s1 = s2, p1 = p2;
-      s2 = high - kGolden * (high - low);
-      p2 = at(s2);
+      x = xm - xl > xh - xm ? xm - kGolden * (xm - xl) : xm + kGolden * (xh - xm);
+    }
+    if (std::abs(x - xm) <= tolerance) break;
+    const CurvePoint point = at(x);
+    // the V's bottom, drawn through points within the band, no lower than the lowest point:
+    // the values are the singular value's rounding there
+    if (drawn && fm <= band && !(point.second < fm)) break;
+    if (point.second < fm) {
+      if (x < xm) {
+        xh = xm, fh = fm;
+      } else {
+        xl = xm, fl = fm;
+      }
+      xm = x, lowest = point;
+    } else if (x < xm) {
+      xl = x, fl = point.second;
+    } else {
+      xh = x, fh = point.second;
     }
   }
-  return p1.second <= p2.second ? p1 : p2;
+  return lowest;
 }
 
 // The curve of solutions through `root` traced both ways (one way where it closes on itself) by
@@ -129,9 +165,14 @@ inline bool trace_curve(const Chain& chain, const Frame& target, const Joints& r
       Joints predicted, next;
       for (int j = 0; j < kDof; ++j) predicted[j] = here.q[j] + step * here.tangent(j);
       next = predicted;
-      settle_across(chain, target, next, lever, band);
-      const bool verified = check(chain, next.data(), target).within(tolerance) &&
-                            joint_distance(next, predicted) <= kChordBend * step;
+      // a curve of coincident axes (q_i +- q_j fixed) is a line of joint space: the predicted
+      // point verifies as it is, and is settled only where it does not
+      bool verified = check(chain, next.data(), target).within(tolerance);
+      if (!verified) {
+        settle_across(chain, target, next, lever, band);
+        verified = check(chain, next.data(), target).within(tolerance) &&
+                   joint_distance(next, predicted) <= kChordBend * step;
+      }
       const CurvePoint there =
           verified ? curve_point(chain, next, lever, here.tangent) : CurvePoint{};
       if (!verified || !(there.smallest <= tolerance)) {

@@ -129,7 +129,9 @@ inline bool any_singular(const std::vector<Root>& roots, double band) {
 // lost. Every other regular arrangement eliminates another joint, where the two differ: their
 // starts are settled too (with their own moved pose where their eigenproblem asks for it). And
 // where the pose lies a hair from one with a curve of solutions, the roots left of that curve
-// are found along the valleys of those found (valley.hpp).
+// are found along the valleys of those found (valley.hpp), and where it lies a hair off a curve
+// of solutions itself, the curve's crossings with a second singular set are roots of their own
+// (crossings.hpp).
 inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh,
                          const Frame& tip_target, double verification, std::vector<Root>& roots) {
   const double band = singular_band(verification);

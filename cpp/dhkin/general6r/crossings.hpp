@@ -147,10 +147,10 @@ inline CurvePoint locate_crossing(const Chain& chain, const Frame& target,
 }
 
 // The curve of solutions through `root` traced both ways (one way where it closes on itself) by
-// steps along its tangent (at most kValleyStep, halved where the corrector's point does not
-// verify, leaves the curve or moves more than kChordBend of the step, down to kValleyStep / 64),
-// each point settled across it; the points in order along the curve into `path`, and whether it
-// closed.
+// steps along its tangent (at most kValleyStep, halved where the point does not verify or
+// leaves the curve, down to kValleyStep / 64), each point kept as predicted where it verifies,
+// else settled across the curve (and then kept where it moved at most kChordBend of the step);
+// the points in order along the curve into `path`, and whether it closed.
 inline bool trace_curve(const Chain& chain, const Frame& target, const Joints& root,
                         double tolerance, double lever, double band,
                         std::vector<CurvePoint>& path) {
@@ -201,8 +201,8 @@ inline bool trace_curve(const Chain& chain, const Frame& target, const Joints& r
 // Newton's goal (kRefineFraction of the refine tolerance, which a root on its curve reaches;
 // off it the error is the same at every member, a floor). Each such curve is traced once (a
 // root within a step of a point traced starts none); at each traced point whose second singular
-// value lies below both its neighbours' the crossing is located, and kept where that value is
-// within the band there and it verifies: appended to `roots` (once, where two curves share it)
+// value lies below both its neighbours' (one of them above the band) the crossing is located,
+// and kept where that value is within the band there and it verifies: appended to `roots` (once, where two curves share it)
 // flagged `crossing`, so that seed_members neither walks it nor merges it with a member.
 inline void crossing_roots(const Chain& chain, const Frame& target, double tolerance,
                            double lever, double band, std::vector<Root>& roots) {
@@ -222,6 +222,9 @@ inline void crossing_roots(const Chain& chain, const Frame& target, double toler
       const CurvePoint& before = path[(i + n - 1) % n];
       const CurvePoint& after = path[(i + 1) % n];
       if (!(path[i].second < before.second && path[i].second <= after.second)) continue;
+      // a dip from above the band: along a surface of solutions (the second singular value
+      // within the band all along) every point is a member, none a crossing of its own
+      if (!(std::max(before.second, after.second) > band)) continue;
       const CurvePoint crossing =
           locate_crossing(chain, target, before, path[i], after, tolerance, lever, band);
       if (!(crossing.second <= band)) continue;

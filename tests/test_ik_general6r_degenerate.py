@@ -357,15 +357,67 @@ def test_isolated_root_beside_a_curve_is_kept_on_a_rounded_description() -> None
     assert not check_pose(robot, model, RootReference(robot, model, starts=STARTS), q)
 
 
-@pytest.mark.xfail(strict=True, reason="curves crossing under rounding: 2 of 4 isolated roots "
-                   "beside the crossing are not returned (docs/general6r.md)")
 def test_crossing_roots_of_the_folded_arm() -> None:
     """M-430iA/2P q = (90, 0, 180, 0, 90, -90) deg on the rounded generated URDF (sample 10348 of
     `dhkin validate fanuc_m430ia2p -n 10000`, which passes it with its 128-start reference): the
-    folded arm's q2-curve (q1 = +-90 deg, q5 - q2 fixed) crosses q5 = 0 (q4 + q6 free), and the
-    rounded target leaves four isolated roots (sigma_min 1.0e-6 .. 2.0e-6) within ~4e-5 rad of
-    the crossings. The solver returns two of them; a 512-start reference finds all four."""
+    folded arm's q2-curve (q1 = +-90 deg, q4 = 0 / 180 deg, q2 + q5 fixed) meets the wrist's
+    singular set q5 = 0, its Jacobian of rank 4 there, and the rounded target (1.2e-10 m off the
+    curve) leaves four isolated near-solutions (sigma_min 1.0e-6 .. 2.0e-6) within ~5e-5 rad of
+    those two points. The solver returned two of them (the walk towards the seed carried the
+    elimination's one away); a 512-start reference finds all four. Each crossing is now a row
+    of its own (cpp/dhkin/general6r/crossings.hpp), tied to them by segments of solutions."""
     robot = dhkin.load("fanuc_m430ia2p")
     model = target_model(robot, "rounded")
     q = np.radians([90, 0, 180, 0, 90, -90])
     assert not check_pose(robot, model, RootReference(robot, model, starts=STARTS), q)
+
+
+def test_crossing_roots_of_the_straight_arm() -> None:
+    """HC10 q = (180, 0, 0, -90, 0, 90) deg on the rounded generated URDF (sample 10770 of
+    `dhkin validate motoman_hc10 -n 10000`, missing-branch on main): the straight-up arm's q1 + q4
+    curve (q2 = q3 = q5 = 0) has rank 3 at q1 = +-90 deg, and the rounded target (3.2e-11 m off
+    the curve) leaves an isolated near-solution (sigma_min 2e-6) 6e-5 rad from the crossing at
+    q1 = 90 deg, which no returned member was tied to. The crossings are rows of their own."""
+    robot = dhkin.load("motoman_hc10")
+    model = target_model(robot, "rounded")
+    q = np.radians([180, 0, 0, -90, 0, 90])
+    assert not check_pose(robot, model, RootReference(robot, model, starts=STARTS), q)
+
+
+#: HC10 special poses (degrees) with q1 on its limit (+-180 deg) and the signs of the seed's
+#: moves that `dhkin validate motoman_hc10 -n 10000` (seed 0, rounded reference) found
+#: discontinuous (samples 10014, 10069, 10437, 10793): the arm points straight down (q2 = 180 deg,
+#: on its limit too), a curve q1 + q4 fixed, and the member nearest the seed lies 1.7e-8 rad
+#: inside the q2 limit as -180 deg: its copy nearest the seed (+180 deg) lies that far beyond,
+#: was set onto the limit, and settling the row with q2 held slid it 0.6-0.8 rad along the curve.
+HC10_ON_LIMIT_POSES = [
+    ((180, 180, 180, 0, -90, -90), (1, -1, 1, -1, 1, 1)),
+    ((180, 180, 0, 0, -90, -90), (1, -1, 1, 1, 1, 1)),
+    ((180, 180, 180, 0, 90, -90), (1, 1, -1, -1, 1, 1)),
+    ((-90, 180, 180, 0, 90, 90), (1, 1, 1, -1, 1, 1))]
+
+
+def test_curve_member_on_a_limit_stays_near_the_seed() -> None:
+    """Targets by Pinocchio on the rounded generated URDF; the seed q moved by +-0.05 rad as the
+    validator moved it (clipped to the limits). Every solution is exact on the table, and the
+    nearest lies within the move of the seed on every joint (the sampled q is a member of the
+    curve that near, the member nearest the seed no farther), flagged singular."""
+    robot = dhkin.load("motoman_hc10")
+    model = target_model(robot, "rounded")
+    failures = []
+    for pose, signs in HC10_ON_LIMIT_POSES:
+        q = np.radians(pose)
+        T = model.fk(q)
+        seed = np.clip(q + PERTURBATION * np.array(signs), robot.lower, robot.upper)
+        result = robot.ik(T, q_seed=seed)
+        answer = np.asarray(result.q).reshape(-1, 6)
+        failures += answer_failures(robot, T, answer, f"{pose}")
+        if not len(answer):
+            continue
+        distance = np.abs(wrapped(answer - seed)).max(axis=1)
+        nearest = int(np.argmin(distance))
+        if distance[nearest] > PERTURBATION + JOINT_TOLERANCE:
+            failures.append(f"{pose}: nearest solution {distance[nearest]:.3f} rad from the seed")
+        elif "singular" not in result.flags[nearest]:
+            failures.append(f"{pose}: the nearest solution is not flagged singular")
+    assert not failures, "\n".join(failures)

@@ -24,18 +24,22 @@ struct Solution {
   Joints q{};
   PoseError error;
   bool singular = false;
+  bool crossing = false;  // a crossing's row (Root::crossing)
 };
 
-// Rows (anything with a `q`) kept in their order, but a row that `singular` marks is dropped
-// where it is one root with a row kept before it (one_root: their midpoint verifies).
+// Rows (anything with a `q` and a `crossing` flag) kept in their order, but a row that
+// `singular` marks is dropped where it is one root with a row kept before it (one_root: their
+// midpoint verifies). A crossing's row is neither dropped nor takes another's place: the
+// isolated near-solutions beside the crossing are tied to it alone (crossings.hpp).
 template <class Row, class Singular>
 void keep_distinct(const Chain& chain, const Frame& target, double tolerance,
                    std::vector<Row>& rows, Singular singular) {
   std::vector<Row> kept;
   for (const Row& row : rows) {
     bool merged = false;
-    if (singular(row)) {
+    if (singular(row) && !row.crossing) {
       for (const Row& other : kept) {
+        if (other.crossing) continue;
         if (one_root(chain, target, row.q, other.q, tolerance)) {
           merged = true;
           break;
@@ -114,7 +118,7 @@ inline void seed_members(const Chain& chain, const Frame& target, const Joints& 
   const double margin = std::max(slack, band);
   std::vector<Root> members;  // curves' members reached from isolated roots beside them
   for (Root& root : roots) {
-    if (!(root.sigma <= band)) continue;
+    if (!(root.sigma <= band) || root.crossing) continue;
     Joints q = root.q;
     PoseError error = root.error;
     nearest_member(chain, target, seed, projection, tolerance, lever, band, q, error);
@@ -209,7 +213,7 @@ inline void nearest_copies(const Chain& chain, const Frame& target, const std::v
   for (const Root& root : roots) {
     const bool singular = root.sigma <= band;
     const double margin = singular ? std::max(slack, band) : slack;
-    Solution row{root.q, root.error, singular};
+    Solution row{root.q, root.error, singular, root.crossing};
     JointMask held{};
     bool inside = true, moved = false;
     for (int j = 0; j < kDof && inside; ++j) {
@@ -221,13 +225,35 @@ inline void nearest_copies(const Chain& chain, const Frame& target, const std::v
       row.q[j] = value;
     }
     if (!inside) continue;
-    if (moved && !settle_on_limits(chain, target, limits, held, tolerance, lever, row, true)) {
-      // set onto a limit it no longer verifies (a singular root's held joints can leave Newton
-      // no way back): its copy strictly within the limits, where it has one, verifies as the
-      // root does (the HC10's straight-up arm at q1 = q4 = 180 deg, the root 4e-8 beyond)
-      if (!copy_within(limits, root.q, reference, row.q)) continue;
-      row.error = check(chain, row.q.data(), target);
-      if (!row.error.within(tolerance)) continue;
+    if (!moved) {
+      out.push_back(row);
+      continue;
+    }
+    const Joints set = row.q;  // the copy, its values set onto the limits
+    const bool settled = settle_on_limits(chain, target, limits, held, tolerance, lever, row, true);
+    // Set onto a limit it no longer verifies (a singular root's held joints can leave Newton no
+    // way back), or, a singular row, it settled farther than the margin from where its values
+    // were set: it has left the seed's member. Its values moved by at most the margin, but with
+    // a joint held the Jacobian of a point of a curve has weak directions of its own (the HC10
+    // pointing down, q2 = q3 = 180 deg: sigma 1.3e-8 with q2 held, against 1.9e-3 for the
+    // curve's nearest transverse direction without), and settle_across's steps along them
+    // (residual / sigma) carried the member 0.6-0.8 rad along the q1 + q4 curve, exact but far
+    // from the seed (`dhkin validate motoman_hc10`, four discontinuous samples). Then its copy
+    // strictly within the limits, where it has one, verifies as the root does (the member 1.7e-8
+    // rad inside the q2 limit there; the HC10's straight-up arm at q1 = q4 = 180 deg, the root
+    // 4e-8 beyond); where it has none, the settled row (a verified member) rather than none.
+    double shift = 0.0;
+    for (int j = 0; j < kDof; ++j) shift = std::max(shift, std::abs(wrap(row.q[j] - set[j])));
+    if (!settled || (singular && shift > margin)) {
+      Solution inner = row;
+      if (copy_within(limits, root.q, reference, inner.q)) {
+        inner.error = check(chain, inner.q.data(), target);
+        if (inner.error.within(tolerance)) {
+          out.push_back(inner);
+          continue;
+        }
+      }
+      if (!settled) continue;
     }
     out.push_back(row);
   }
@@ -257,7 +283,7 @@ inline void every_copy(const Chain& chain, const Frame& target, const std::vecto
       total *= count[j];
     }
     for (long index = 0; index < total; ++index) {
-      Solution row{root.q, root.error, root.sigma <= band};
+      Solution row{root.q, root.error, root.sigma <= band, root.crossing};
       JointMask held{};
       long rest = index;
       for (int j = kDof - 1; j >= 0; --j) {

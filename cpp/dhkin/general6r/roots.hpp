@@ -227,6 +227,9 @@ struct Root {
   Joints q{};
   PoseError error;
   double sigma = 0.0;
+  // a crossing of a curve of solutions whose target lies off it (crossings.hpp): a root of its
+  // own, neither walked towards the seed nor merged with the curve's members
+  bool crossing = false;
 };
 
 // Newton's basin around a regular root (docs/general6r.md, "Speed, fifth pass"). Let F be the

@@ -11,6 +11,7 @@
 
 #include "dhkin/general6r/answer.hpp"
 #include "dhkin/general6r/candidates.hpp"
+#include "dhkin/general6r/crossings.hpp"
 #include "dhkin/general6r/roots.hpp"
 #include "dhkin/general6r/valley.hpp"
 #include "dhkin/pose.hpp"
@@ -128,7 +129,9 @@ inline bool any_singular(const std::vector<Root>& roots, double band) {
 // lost. Every other regular arrangement eliminates another joint, where the two differ: their
 // starts are settled too (with their own moved pose where their eigenproblem asks for it). And
 // where the pose lies a hair from one with a curve of solutions, the roots left of that curve
-// are found along the valleys of those found (valley.hpp).
+// are found along the valleys of those found (valley.hpp), and where it lies a hair off a curve
+// of solutions itself, the curve's crossings with a second singular set are roots of their own
+// (crossings.hpp).
 inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh,
                          const Frame& tip_target, double verification, std::vector<Root>& roots) {
   const double band = singular_band(verification);
@@ -153,6 +156,7 @@ inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh
     keep_values(starts);
   }
   valley_roots(tip.chain, tip_target, verification, tip.lever, band, start_values, roots);
+  crossing_roots(tip.chain, tip_target, verification, tip.lever, band, roots);
   return failed;
 }
 

@@ -276,12 +276,6 @@ def test_vendor_poses_at_the_elbow_and_the_wrist_singularity(name: str) -> None:
     run.assert_clean(f"{name}: 200 vendor poses at the elbow and the wrist singularity")
 
 
-@pytest.mark.xfail(strict=True, reason="known defect: a target 1e-11 m off a pose at the elbow "
-                   "and the wrist singularity gets q5 ~ sqrt(1e-11) from the stretched elbow; "
-                   "unless the elbow is flagged, the wrist's seed band is not widened by that, "
-                   "so the answer is exact but neither flagged wrist nor the seed's q4 / q6 "
-                   "split (widening it there seeded wrists 1e-4 rad off the singularity whose "
-                   "settling crossed elbow branches: tried, not kept)")
 @pytest.mark.parametrize("name", SPHERICAL_TABLES)
 def test_nudged_poses_at_the_elbow_and_the_wrist_singularity(name: str) -> None:
     run = double_singular_run(name, NUDGE)

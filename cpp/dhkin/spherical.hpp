@@ -285,17 +285,20 @@ DHKIN_INLINE MaskOf<V> elbow_flagged(const SphericalGeometry& g, V sine_scaled) 
 // wrists() asks whether the wrist is near singular with the arm at the elbow's singularity
 // (wrist_near_at_singular_elbow; counted everywhere, psi ~1e-4 on the anthropomorphic arm
 // seeded the other elbow branch's wrists 1e-4 rad off the singularity, whose settling crossed
-// to this branch's roots and lost the other's). Nor where the wrist
-// centre is within the seed band of axis 2 (q2 free; the factor L3 / distance unbounded there):
-// seeding the wrist beside q2 moved the answer off the seed's q2 (anthropomorphic arm folded,
-// tests/test_validate.py).
+// to this branch's roots and lost the other's). On a refined table (spread > 0) only where the
+// elbow is flagged: its seed band already spans the family band, where the exact chain's
+// singular sets lie, and its clamp (with twice the model deviation) makes this bound ~0.1 rad
+// (Kinova Gen3), not the tolerance's ~1e-4. Nor where the wrist centre is within the seed band
+// of axis 2 (q2 free; the factor L3 / distance unbounded there): seeding the wrist beside q2
+// moved the answer off the seed's q2 (anthropomorphic arm folded, tests/test_validate.py).
 template <class V>
 DHKIN_INLINE V elbow_uncertainty(const SphericalGeometry& g, V distance, V sine_scaled,
                                  double clamp) {
   const double upper = g.upper_length, fore = g.forearm_length;
   const V shift = distance * clamp / (upper * fore);  // of cos(psi)
   const V psi = min(2.0 * upper * fore * shift / max(sine_scaled, V(1e-300)), sqrt(2.0 * shift));
-  return psi * (distance + fore) / max(distance, V(1e-300));
+  const V turn = psi * (distance + fore) / max(distance, V(1e-300));
+  return g.spread == 0.0 ? turn : select(elbow_flagged(g, sine_scaled), turn, V(0.0));
 }
 
 // Both wrist branches for one arm turned by turn23 about `lateral` (wrists above).

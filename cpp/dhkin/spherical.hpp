@@ -214,11 +214,12 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
     const V h02 = h[a].h2.x, h12 = h[a].h2.y;
     sine[a] = sqrt(h02 * h02 + h12 * h12);
     roots[a].flag = bits_if(sine[a] <= kFlagBand, kWrist);
-    MaskOf<V> near = sine[a] <= request.seed_angle;
-    const MaskOf<V> widened = !near && sine[a] <= request.seed_angle + arms[a].uncertainty;
+    MaskOf<V> near = sine[a] <= request.seed_angle + arms[a].uncertainty;
+    // beyond the seed band, the elbow unflagged: near only at both singularities
+    const MaskOf<V> widened = near && !arms[a].flagged && sine[a] > request.seed_angle;
     if (any(widened)) {
-      near = near || (widened && (arms[a].flagged || wrist_near_at_singular_elbow(
-                                                         g, h[a], turn23[a], arms[a], request)));
+      near = near && (!widened ||
+                      wrist_near_at_singular_elbow(g, h[a], turn23[a], arms[a], request));
     }
     roots[a].near = bits_if(near, kWrist);
     seeded[a] = roots[a].near != 0 && (request.use_seed & kWrist) != 0;

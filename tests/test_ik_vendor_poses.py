@@ -28,6 +28,7 @@ import numpy as np
 import pytest
 
 import dhkin
+from dhkin.ik.core import FLAG_BAND
 from dhkin.ik.geometry import joint_axes
 from dhkin.reference import Reference
 from dhkin.transforms import pose_error
@@ -276,17 +277,36 @@ def test_vendor_poses_at_the_elbow_and_the_wrist_singularity(name: str) -> None:
     run.assert_clean(f"{name}: 200 vendor poses at the elbow and the wrist singularity")
 
 
-@pytest.mark.xfail(strict=True, reason="known defect: a target 1e-11 m off a pose at the elbow "
-                   "and the wrist singularity gets q5 ~ sqrt(1e-11) from the stretched elbow; "
-                   "unless the elbow is flagged, the wrist's seed band is not widened by that, "
-                   "so the answer is exact but neither flagged wrist nor the seed's q4 / q6 "
-                   "split (widening it there seeded wrists 1e-4 rad off the singularity whose "
-                   "settling crossed elbow branches: tried, not kept)")
 @pytest.mark.parametrize("name", SPHERICAL_TABLES)
 def test_nudged_poses_at_the_elbow_and_the_wrist_singularity(name: str) -> None:
     run = double_singular_run(name, NUDGE)
     run.assert_clean(f"{name}: 200 vendor poses at the elbow and the wrist singularity, "
                      f"moved by {NUDGE:g} m")
+
+
+@pytest.mark.parametrize("name", ["abb_irb1200_7_70", "fanuc_m10ia"])
+def test_nudged_double_singular_poses_at_the_wrist_bands_edge(name: str) -> None:
+    """The widened wrist band at the edge of the seed band (exact tables: the flag band): the
+    nudged double-singular targets with |q5| = half the band keep the seed's q4 / q6 split,
+    flagged (the arm at its stretched or folded elbow leaves the wrist within the band); with
+    |q5| = twice the band the wrist is regular there: the sampled q comes back, unflagged."""
+    robot = dhkin.load(name)
+    q = elbow_and_wrist_singular_q(robot, 50, np.random.default_rng(108))
+    signs = np.random.default_rng(109).choice([-1.0, 1.0], len(q))
+    inside, outside = Run(robot, vendor(name)), Run(robot, vendor(name))
+    q[:, 4] = 0.5 * FLAG_BAND * signs
+    inside.check(q, wrist_singular=True, continuity=True, seed=7, nudge=NUDGE)
+    inside.assert_clean(f"{name}: 50 nudged double-singular poses, |q5| half the band")
+    q[:, 4] = 2.0 * FLAG_BAND * signs
+    outside.check(q, seed=7, nudge=NUDGE)
+    outside.assert_clean(f"{name}: 50 nudged double-singular poses, |q5| twice the band")
+    T = vendor(name).fk(q)
+    directions = np.random.default_rng(7).normal(size=(len(q), 3))
+    T[:, :3, 3] += NUDGE * directions / np.linalg.norm(directions, axis=1)[:, None]
+    for k in range(len(q)):
+        solutions = robot.ik(T[k], q_seed=q[k])
+        nearest = int(np.argmin(np.abs(wrapped(solutions.q - q[k])).max(axis=1)))
+        assert "wrist" not in solutions.flags[nearest], q[k]
 
 
 def test_vendor_poses_at_special_angles(exact_robot) -> None:

@@ -55,6 +55,13 @@ struct SphericalGeometry {
 
 namespace spherical {
 
+// angle(target * conj(point)): the turn taking arm-plane `point` towards `target`.
+template <class V>
+DHKIN_INLINE V turn_to(const PlanarT<V>& target, const PlanarT<V>& point) {
+  return atan2(target.reach * point.height - target.height * point.reach,
+               target.height * point.height + target.reach * point.reach);
+}
+
 // Both q1 branches, with the wrist centre's arm-plane target from axis 2.
 template <class V>
 struct ShoulderRoots {
@@ -126,6 +133,14 @@ DHKIN_INLINE WristColumns<V> wrist_columns(const SphericalGeometry& g,
   return {g.wrist_frame.transposed_times(a), g.wrist_frame.transposed_times(b)};
 }
 
+// How far one arm branch's turn23 may be off because the arm is only as good as the pose.
+template <class V>
+struct ArmBand {
+  V uncertainty{};      // bound of the move (elbow_uncertainty; 0 where the arm is exact)
+  PlanarT<V> target{};  // the wrist centre's arm-plane target from axis 2
+  MaskOf<V> flagged{};  // the elbow flagged (or merged): the two elbow branches are one
+};
+
 // q4, q5, q6 of both wrist branches.
 template <class V>
 struct WristRoots {
@@ -134,6 +149,37 @@ struct WristRoots {
   SinCosT<V> s4[2] = {}, s5[2] = {};  // their sines and cosines
   BitsOf<V> flag{}, near{};
 };
+
+// Whether the pose is within the clamp of one at the elbow and the wrist singularity at once:
+// the arm at its elbow's singularity (stretched, psi = 0, or folded, psi = pi, whichever length
+// is nearer the target's distance) pointed at the target (turn2 as in the closed form) reaches
+// it to within the clamp, and there the wrist is singular to within the seed band. Turning the
+// arm by delta about `lateral` turns h2 (axis 6 in the wrist frame, wrist columns h of the arm
+// turned by turn23) by -delta about F^T lateral. Only at the elbow's singularity: a wrist a hair
+// off it whose arm is merely near the stretch (psi ~1e-4) is singular on the other elbow branch
+// (or beside axis 2, turning the arm about it); seeding those moved the settled answer onto
+// another branch's roots and lost that branch's own (tried, not kept).
+template <class V>
+DHKIN_INLINE MaskOf<V> wrist_near_at_singular_elbow(const SphericalGeometry& g,
+                                                    const WristColumns<V>& h, V turn23,
+                                                    const ArmBand<V>& arm,
+                                                    const FamilyRequestT<V>& request) {
+  const double upper = g.upper_length, fore = g.forearm_length;
+  const V distance =
+      sqrt(arm.target.height * arm.target.height + arm.target.reach * arm.target.reach);
+  const MaskOf<V> folded = abs(distance - std::abs(upper - fore)) < abs(upper + fore - distance);
+  const V turn3 = select(folded, V(kPi), V(0.0)) - g.bend_at_zero;
+  const SinCosT<V> t3 = sincos(turn3);
+  const PlanarT<V> bent{
+      g.upper_arm.height + (t3.c * g.forearm.height - t3.s * g.forearm.reach),
+      g.upper_arm.reach + (t3.c * g.forearm.reach + t3.s * g.forearm.height)};
+  const V length = sqrt(bent.height * bent.height + bent.reach * bent.reach);
+  const SinCosT<V> delta = sincos(turn_to(arm.target, bent) + turn3 - turn23);
+  const Vec3T<V> h2 = rotate_about(g.wrist_frame.transposed_times(g.lateral), delta.c, -delta.s,
+                                   h.h2);
+  return abs(length - distance) <= request.clamp &&
+         sqrt(h2.x * h2.x + h2.y * h2.y) <= request.seed_angle;
+}
 
 // Both wrist branches for each of N arms, arm a turned by turn23[a] about `lateral`:
 // H = F^T R23^T K1 = Rz(t4) Ry(t5 + tilt) Rz(t6). The arms go step by step, each step for every
@@ -147,13 +193,14 @@ struct WristRoots {
 // branches), theta = +- the computed angle, and t6 from the remainder Ry(-theta) Rz(-t4) H, so
 // that the pose error is what the choice costs.
 //
-// `turn_uncertainty` (rad, per arm; 0 where the arm is exact): how far turn23 may be off because
-// the arm above is only as good as the pose (elbow_uncertainty); the wrist angle inherits it, so
-// the wrist counts as near singular within that much more than the seed band.
+// `arms` (per arm): how far turn23 may be off because the arm above is only as good as the pose
+// (ArmBand, elbow_uncertainty); the wrist angle inherits it. Beyond the seed band but within it
+// by that much more, the wrist counts as near singular where the elbow is flagged, or where the
+// pose is within the clamp of one at both singularities (wrist_near_at_singular_elbow).
 template <int N, class V>
 DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* const* columns,
                          const V* turn23, const JointsT<V>& seed,
-                         const FamilyRequestT<V>& request, const V (&turn_uncertainty)[N],
+                         const FamilyRequestT<V>& request, const ArmBand<V> (&arms)[N],
                          WristRoots<V>* roots) {
   const double d4 = g.wrist_directions[0], d5 = g.wrist_directions[1], d6 = g.wrist_directions[2];
   SinCosT<V> t23[N], s_theta[N], s4[N][2];
@@ -167,8 +214,14 @@ DHKIN_INLINE void wrists(const SphericalGeometry& g, const TargetColumns<V>* con
     const V h02 = h[a].h2.x, h12 = h[a].h2.y;
     sine[a] = sqrt(h02 * h02 + h12 * h12);
     roots[a].flag = bits_if(sine[a] <= kFlagBand, kWrist);
-    const V band = request.seed_angle + turn_uncertainty[a];
-    roots[a].near = bits_if(sine[a] <= band, kWrist);
+    MaskOf<V> near = sine[a] <= request.seed_angle + arms[a].uncertainty;
+    // beyond the seed band, the elbow unflagged: near only at both singularities
+    const MaskOf<V> widened = near && !arms[a].flagged && sine[a] > request.seed_angle;
+    if (any(widened)) {
+      near = near && (!widened ||
+                      wrist_near_at_singular_elbow(g, h[a], turn23[a], arms[a], request));
+    }
+    roots[a].near = bits_if(near, kWrist);
     seeded[a] = roots[a].near != 0 && (request.use_seed & kWrist) != 0;
   }
   for (int a = 0; a < N; ++a) {
@@ -228,14 +281,17 @@ DHKIN_INLINE MaskOf<V> elbow_flagged(const SphericalGeometry& g, V sine_scaled) 
 // onto the target, and a turn of the forearm by x turns it by at most x L3 / distance. Near the
 // stretched or folded elbow this is ~sqrt(clamp / L): a pose a hair from both the elbow and the
 // wrist singularity has its closed-form q5 that far off (FANUC M-10iA: 5e-6 rad for a pose
-// whose q5 is 1e-12). Counted only where the elbow is flagged (|sin psi| <= kFlagBand, or
-// merged): there the two elbow branches are one, so a seeded wrist settles on its own arm. A
-// hair farther off (psi ~1e-4, anthropomorphic arm) the same bound would seed wrists 1e-4 rad
-// off the singularity, whose settling crosses to the other elbow branch or moves the arm along
-// the double singularity's band of near-solutions (duplicate answers). Nor where the wrist
-// centre is within the seed band of axis 2 (q2 free; the factor L3 / distance unbounded there):
-// seeding the wrist beside q2 moved the answer off the seed's q2 (anthropomorphic arm folded,
-// tests/test_validate.py).
+// whose q5 is 1e-12; a target 1e-11 m inside the stretch of a pose at both singularities has
+// its elbow ~1e-5 rad off, unflagged, and q5 as far). A bound only: unless the elbow is flagged,
+// wrists() asks whether the wrist is near singular with the arm at the elbow's singularity
+// (wrist_near_at_singular_elbow; counted everywhere, psi ~1e-4 on the anthropomorphic arm
+// seeded the other elbow branch's wrists 1e-4 rad off the singularity, whose settling crossed
+// to this branch's roots and lost the other's). On a refined table (spread > 0) only where the
+// elbow is flagged: its seed band already spans the family band, where the exact chain's
+// singular sets lie, and its clamp (with twice the model deviation) makes this bound ~0.1 rad
+// (Kinova Gen3), not the tolerance's ~1e-4. Nor where the wrist centre is within the seed band
+// of axis 2 (q2 free; the factor L3 / distance unbounded there): seeding the wrist beside q2
+// moved the answer off the seed's q2 (anthropomorphic arm folded, tests/test_validate.py).
 template <class V>
 DHKIN_INLINE V elbow_uncertainty(const SphericalGeometry& g, V distance, V sine_scaled,
                                  double clamp) {
@@ -243,7 +299,7 @@ DHKIN_INLINE V elbow_uncertainty(const SphericalGeometry& g, V distance, V sine_
   const V shift = distance * clamp / (upper * fore);  // of cos(psi)
   const V psi = min(2.0 * upper * fore * shift / max(sine_scaled, V(1e-300)), sqrt(2.0 * shift));
   const V turn = psi * (distance + fore) / max(distance, V(1e-300));
-  return select(elbow_flagged(g, sine_scaled), turn, V(0.0));
+  return g.spread == 0.0 ? turn : select(elbow_flagged(g, sine_scaled), turn, V(0.0));
 }
 
 // Both wrist branches for one arm turned by turn23 about `lateral` (wrists above).
@@ -252,7 +308,7 @@ DHKIN_INLINE WristRoots<V> wrist(const SphericalGeometry& g, const TargetColumns
                                  V turn23, const JointsT<V>& seed,
                                  const FamilyRequestT<V>& request) {
   const TargetColumns<V>* arm[1] = {&columns};
-  const V exact[1] = {V(0.0)};  // the arm given, without uncertainty
+  const ArmBand<V> exact[1] = {};  // the arm given, without uncertainty
   WristRoots<V> roots[1];
   wrists<1>(g, arm, &turn23, seed, request, exact, roots);
   return roots[0];
@@ -265,13 +321,6 @@ DHKIN_INLINE void store(CandidatesT<V>& out, int b, V q1, V q2, V q3, const Wris
   out.valid[b] = valid;
   out.flags[b] = flag;
   out.near[b] = near;
-}
-
-// angle(target * conj(point)): the turn taking arm-plane `point` towards `target`.
-template <class V>
-DHKIN_INLINE V turn_to(const PlanarT<V>& target, const PlanarT<V>& point) {
-  return atan2(target.reach * point.height - target.height * point.reach,
-               target.height * point.height + target.reach * point.reach);
 }
 
 }  // namespace spherical
@@ -337,9 +386,12 @@ inline void solve_spherical_wrist(const SphericalGeometry& g, const FrameT<V>& T
   }
   const TargetColumns<V>* arm_columns[4] = {&columns[0], &columns[0], &columns[1], &columns[1]};
   WristRoots<V> w[4];
-  const V turn_uncertainty[4] = {arm_uncertainty[0], arm_uncertainty[0], arm_uncertainty[1],
-                                 arm_uncertainty[1]};
-  wrists<4>(g, arm_columns, turn23, seed, request, turn_uncertainty, w);
+  ArmBand<V> bands[4];
+  for (int k = 0; k < 4; ++k) {
+    const int s = k / 2;
+    bands[k] = {arm_uncertainty[s], target[s], elbow_flag[s] != 0};
+  }
+  wrists<4>(g, arm_columns, turn23, seed, request, bands, w);
   for (int b = 0; b < kBranches; ++b) {
     const int s = b / 4, e = (b / 2) % 2, k = 2 * s + e, wb = b % 2;
     const auto arm_valid =

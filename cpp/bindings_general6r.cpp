@@ -183,12 +183,12 @@ class General6R {
   }
 
   // The starts of one elimination of T_dh: (q (m, 6), origin (m,), lead condition, degenerate).
-  nb::tuple candidates(Pose T_dh, bool solve_ill) const {
+  nb::tuple candidates(Pose T_dh) const {
     std::vector<g6::Start> starts;
     g6::EliminationInfo info;
     {
       nb::gil_scoped_release release;
-      info = g6::candidates(solver_.elimination, frame_of(T_dh.data()), solve_ill, starts);
+      info = g6::candidates(solver_.elimination, frame_of(T_dh.data()), starts);
     }
     std::vector<double> q;
     std::vector<std::int64_t> origin;
@@ -293,7 +293,7 @@ dhkin::Chain chain6(Input<double, nb::shape<kDof, 4, 4>> before,
 void bind_general6r(nb::module_& m) {
   nb::class_<General6R>(m, "General6R")
       .def(nb::init<const nb::dict&, const nb::list&>(), "fields"_a, "others"_a)
-      .def("candidates", &General6R::candidates, "T_dh"_a, "solve_ill"_a)
+      .def("candidates", &General6R::candidates, "T_dh"_a)
       .def("roots", &General6R::roots, "T_dh"_a, "tolerance"_a)
       .def("smallest_singular", &General6R::smallest_singular, "q"_a)
       .def("solve", &General6R::solve, "T"_a, "seed"_a, "tolerance"_a, "copies"_a,

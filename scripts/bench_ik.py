@@ -566,7 +566,7 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
     T_dh = [np.ascontiguousarray(solver.target_dh(T)) for T in poses.T[:n]]
     targets = [np.ascontiguousarray(T) for T in poses.T[:n]]
     seed = np.zeros(6)
-    counts = [len(core.candidates(T, True)[0]) for T in T_dh]
+    counts = [len(core.candidates(T)[0]) for T in T_dh]
 
     def median_of(call: Callable[[int], object]) -> float:
         best = math.inf
@@ -579,7 +579,7 @@ def profile_general(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple
             best = min(best, statistics.median(times) / 1000.0)
         return best
 
-    eliminate = median_of(lambda k: core.candidates(T_dh[k], True))
+    eliminate = median_of(lambda k: core.candidates(T_dh[k]))
     roots = median_of(lambda k: core.roots(T_dh[k], EXACT))
     solve = median_of(lambda k: core.solve(targets[k], seed, EXACT, False, None))
     single = median_of(lambda k: robot.ik(poses.T[k], copies=False))

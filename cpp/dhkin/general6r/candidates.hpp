@@ -117,8 +117,8 @@ struct Angle {
 }  // namespace candidates_detail
 
 // The starts of every root the eigenproblem of T_dh (DH frame 0 -> DH frame 6 of the exact
-// chain) holds, appended to `out`; none where the leading matrix is ill-conditioned unless
-// `solve_ill` (QZ on the pencil then). A `moved` pose (all_candidates) is solved by QZ whatever
+// chain) holds, appended to `out`; where every leading matrix is ill-conditioned, by QZ on the
+// pencil. A `moved` pose (all_candidates) is solved by QZ whatever
 // its leading matrix's condition: it lies within the move of a pose whose matrix polynomial is
 // singular, or nearly, so the companion's A^-1 (reciprocal condition 1.4e-7 on a tilted-UR5
 // special pose) amplifies rounding into its eigenvalues (1e-4 apart between two QR codes there,
@@ -128,8 +128,8 @@ struct Angle {
 // within the band) whose angles lie within kCluster of each other are one cluster of m: at each
 // distinct member the m-dimensional null space of M is split into one monomial vector per root
 // (m = 1: inverse iteration), and each vector's joints are back-substituted.
-inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool solve_ill,
-                                  std::vector<Start>& out, bool moved = false) {
+inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, std::vector<Start>& out,
+                                  bool moved = false) {
   using namespace candidates_detail;
   EliminationInfo info;
   const Frame target = el.reversed ? inverse(T_dh) : T_dh;
@@ -181,7 +181,6 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
     count = companion_eigenvalues(A_inverse, B, C, deflate ? &el.spurious : nullptr, eigenvalues);
     if (count == 0) return info;
   } else {
-    if (!solve_ill) return info;
     Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();
     left.topRightCorner<kMonomials, kMonomials>().setIdentity();
     left.bottomLeftCorner<kMonomials, kMonomials>() = -C;
@@ -262,14 +261,14 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, bool
 inline bool all_candidates(const Elimination& el, const Moves& moves, const Frame& T_dh,
                            std::vector<Start>& out, bool fallback = true) {
   const std::size_t own = out.size();
-  const EliminationInfo info = candidates(el, T_dh, true, out);
+  const EliminationInfo info = candidates(el, T_dh, out);
   if (std::isnan(info.lead_condition)) return false;
   if (info.lead_condition >= kLeadCondition && !info.degenerate) return false;
   if (info.lead_condition < kLeadCondition) {
     for (std::size_t i = own; i < out.size(); ++i) out[i].origin |= kIll;
   }
   const std::size_t first = out.size();
-  candidates(el, moves.motion(1.0) * T_dh, true, out, true);
+  candidates(el, moves.motion(1.0) * T_dh, out, true);
   for (std::size_t i = first; i < out.size(); ++i) out[i].origin |= kMoved;
   if (fallback) {
     for (const Joints& q : moves.fallback) out.push_back({q, 0});

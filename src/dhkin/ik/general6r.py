@@ -148,7 +148,7 @@ class General6RSolver:
         """The starts of one elimination of the target T_dh (DH frame 0 -> DH frame 6 of the
         exact chain), before refinement: joint values (m, 6)."""
         starts, _, _, _ = (core or self.core).candidates(
-            np.ascontiguousarray(T_dh, dtype=np.float64), True)
+            np.ascontiguousarray(T_dh, dtype=np.float64))
         return np.asarray(starts)
 
     def _eliminator(self, arrangement: Arrangement) -> tuple[Model, Elimination]:

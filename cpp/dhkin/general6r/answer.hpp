@@ -242,9 +242,7 @@ inline void nearest_copies(const Chain& chain, const Frame& target, const std::v
     // strictly within the limits, where it has one, verifies as the root does (the member 1.7e-8
     // rad inside the q2 limit there; the HC10's straight-up arm at q1 = q4 = 180 deg, the root
     // 4e-8 beyond); where it has none, the settled row (a verified member) rather than none.
-    double shift = 0.0;
-    for (int j = 0; j < kDof; ++j) shift = std::max(shift, std::abs(wrap(row.q[j] - set[j])));
-    if (!settled || (singular && shift > margin)) {
+    if (!settled || (singular && joint_distance(row.q, set) > margin)) {
       Solution inner = row;
       if (copy_within(limits, root.q, reference, inner.q)) {
         inner.error = check(chain, inner.q.data(), target);

@@ -65,13 +65,6 @@ inline CurvePoint curve_point(const Chain& chain, const Joints& q, double lever,
   return out;
 }
 
-// The largest wrapped joint difference of a and b (rad).
-inline double joint_distance(const Joints& a, const Joints& b) {
-  double out = 0.0;
-  for (int j = 0; j < kDof; ++j) out = std::max(out, std::abs(wrap(a[j] - b[j])));
-  return out;
-}
-
 // The point of the curve along the two chords before -> middle -> after at s in [0, 2] (s <= 1
 // on the first), settled onto the curve across it (settle_across above the band: near a
 // crossing the second weak direction is left alone).

@@ -41,6 +41,13 @@ constexpr double kChordBend = 0.25;
 // Newton's budget for a member (it converges slowly at a singular root).
 constexpr int kMemberBudget = 4 * newton::kMaxSteps;
 
+// The largest wrapped joint difference of a and b (rad).
+inline double joint_distance(const Joints& a, const Joints& b) {
+  double out = 0.0;
+  for (int j = 0; j < kDof; ++j) out = std::max(out, std::abs(wrap(a[j] - b[j])));
+  return out;
+}
+
 // The sum of squared wrapped joint differences.
 inline double squared_distance(const Joints& a, const Joints& b) {
   double total = 0.0;
@@ -180,10 +187,7 @@ inline void walk(const Chain& chain, const Frame& target, Joints& q, const Joint
       // verifies near the chord
       const Joints midpoint = middle;
       settle_across(chain, target, middle, lever, flat, JointMask{}, svd.V);
-      double moved = 0.0;
-      for (int j = 0; j < kDof; ++j) {
-        moved = std::max(moved, std::abs(wrap(middle[j] - midpoint[j])));
-      }
+      const double moved = joint_distance(middle, midpoint);
       kept = check(chain, middle.data(), target).within(tolerance) && moved <= kChordBend * chord;
     }
     if (!kept) {

@@ -165,11 +165,7 @@ inline void trace_valley(const Chain& chain, const Frame& target, const Joints& 
       visited.push_back(q);
       travelled += step;
       step = std::min(2.0 * step, kValleyStep);
-      double from_root = 0.0;
-      for (int j = 0; j < kDof; ++j) {
-        from_root = std::max(from_root, std::abs(wrap(q[j] - root[j])));
-      }
-      if (travelled > kValleyStep && from_root < 0.5 * kValleyStep) {
+      if (travelled > kValleyStep && joint_distance(q, root) < 0.5 * kValleyStep) {
         closed = true;
         break;
       }
@@ -181,9 +177,7 @@ inline void trace_valley(const Chain& chain, const Frame& target, const Joints& 
 // Whether q lies within a continuation step (rad, every joint) of a point a valley passed.
 inline bool on_traced_valley(const Joints& q, const std::vector<Joints>& visited) {
   for (const Joints& point : visited) {
-    double apart = 0.0;
-    for (int j = 0; j < kDof; ++j) apart = std::max(apart, std::abs(wrap(q[j] - point[j])));
-    if (apart <= kValleyStep) return true;
+    if (joint_distance(q, point) <= kValleyStep) return true;
   }
   return false;
 }

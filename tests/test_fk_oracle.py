@@ -118,8 +118,8 @@ def pinocchio_frames(robot: dhkin.Robot, Q: NDArray[np.float64],
     model, data = reference.model, reference.data
     ids = [reference.frame_id(name) for name in names]
     out = np.empty((len(names), Q.shape[0], 4, 4))
-    for k, q in enumerate(Q):
-        pin.framesForwardKinematics(model, data, reference.configuration(q))
+    for k, config in enumerate(reference.configurations(Q)):
+        pin.framesForwardKinematics(model, data, config)
         for j, frame_id in enumerate(ids):
             out[j, k] = data.oMf[frame_id].homogeneous
     return {name: out[j] for j, name in enumerate(names)}

@@ -99,8 +99,8 @@ def oracle_geometry(robot: dhkin.Robot, q: np.ndarray) -> OracleGeometry:
     columns = [model.joints[j].idx_v for j in ref.chain]
     poses = np.empty((len(q), 4, 4))
     jacobians = np.empty((len(q), 6, model.nv))
-    for k, row in enumerate(q):
-        pin.computeJointJacobians(model, data, ref.configuration(row))
+    for k, config in enumerate(ref.configurations(q)):
+        pin.computeJointJacobians(model, data, config)
         poses[k] = pin.updateFramePlacement(model, data, tip).homogeneous
         jacobians[k] = data.J
     # world-frame joint twists: angular part = axis, linear part = -axis x (a point of the axis)

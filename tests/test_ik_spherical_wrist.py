@@ -152,17 +152,23 @@ def limit_slack(table: dhkin.DHTable) -> float:
 
 def check_copies_of_principal(table: dhkin.DHTable, principal: np.ndarray,
                               principal_valid: np.ndarray, Q: np.ndarray,
-                              valid: np.ndarray) -> None:
+                              valid: np.ndarray, branch: np.ndarray | None = None) -> None:
     """``copies=True``: the returned set is exactly the in-limit 2pi copies of the principal
     solutions.
 
     Checked as: (a) each returned solution is in the limits and is a 2pi copy (<= 1e-9 rad) of a
-    valid principal one; (b) no two returned solutions are the same copy; (c) per pose, the
-    number returned equals the number of in-limit copies counted here from the principal set.
+    valid principal one (the one its ``branch`` label names when given, else the nearest); (b)
+    no two returned solutions are the same copy; (c) per pose, the number returned equals the
+    number of in-limit copies counted here from the principal set.
     """
     lower, upper = table.lower, table.upper
     assert np.all(~valid | np.all((lower <= Q) & (upper >= Q), axis=-1))
-    match = copy_source(principal, principal_valid, Q)
+    if branch is None:
+        match = copy_source(principal, principal_valid, Q)
+    else:
+        match = np.maximum(branch.astype(np.int64), 0)
+        labelled_valid = np.take_along_axis(principal_valid, match, axis=1)
+        assert np.all(~valid | labelled_valid), "a solution names a branch without solution"
     source = np.take_along_axis(principal, match[..., None], axis=1)
     gap = np.abs(wrapped_difference(Q, source)).max(axis=-1)
     assert np.all(~valid | (gap <= 1e-9)), "a returned solution is no 2pi copy"
@@ -272,7 +278,7 @@ def jacobian_axes(robot: dhkin.Robot, q: np.ndarray) -> tuple[np.ndarray, np.nda
     twist of a unit joint motion, so w is the axis and w x v its point nearest the origin.
     Returns (points, directions), each (M, n, 3)."""
     reference = robot.reference()
-    J = np.stack([reference.jacobian(row, reference="world") for row in q])
+    J = reference.jacobians(q, reference="world")
     direction = np.swapaxes(J[:, 3:], 1, 2)  # (M, joints, 3)
     point = np.cross(direction, np.swapaxes(J[:, :3], 1, 2))
     return point, direction
@@ -778,7 +784,8 @@ def test_random_poses_exact_complete_and_all_eight_branches(load_robot, name):
                                                                                 targets)))
             check_branch_sources(robot.table, principal, principal_valid, batch)
             assert np.all(batch.residuals[batch.valid] <= IK_TOLERANCE)
-        check_copies_of_principal(robot.table, principal, principal_valid, every.q, every.valid)
+        check_copies_of_principal(robot.table, principal, principal_valid, every.q, every.valid,
+                                  every.branch)
         check_nearest_copies(robot.table, principal, principal_valid, default, None)
         banded = seed_band(robot, q)
         in_band += int(banded.sum())

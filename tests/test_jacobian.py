@@ -234,3 +234,43 @@ def test_irb_shoulder_singularity_puts_the_wrist_centre_on_axis_1() -> None:
     reference = dhkin.load("abb_irb1200_7_70").reference()
     centre = reference.fk(np.array([0.3, _irb_shoulder_q2(), 0.0, 1.0, 0.7, 0.5]), frame="link_5")
     assert math.hypot(centre[0, 3], centre[1, 3]) <= 1e-15
+
+
+def _batch_references() -> list[tuple[str, Reference]]:
+    """A generated URDF (configuration = joint vector), the same chain from a base link in its
+    middle, and one with continuous joints (Pinocchio stores cos, sin)."""
+    ur5 = dhkin.load("ur5").urdf()
+    planar = dhkin.load("planar_2r").urdf().replace('type="revolute"', 'type="continuous"')
+    return [("ur5", Reference(ur5)),
+            ("ur5 from upper_arm_link", Reference(ur5, base="upper_arm_link")),
+            ("continuous 2R", Reference(planar))]
+
+
+@pytest.mark.parametrize(("label", "reference"), _batch_references(),
+                         ids=lambda value: value if isinstance(value, str) else "")
+def test_batch_configurations_and_jacobians_equal_the_single_ones(label: str,
+                                                                  reference: Reference) -> None:
+    """configurations(Q) and jacobians(Q) equal configuration(q) and jacobian(q) row by row, bit
+    for bit, in each convention; a bad batch is refused as a whole, naming its shape or values."""
+    rng = np.random.default_rng(zlib.crc32(label.encode()))
+    Q = rng.uniform(-math.pi, math.pi, (50, reference.dof))
+    Q[0] = 0.0
+    Q[1] = np.resize([math.pi / 2, -math.pi / 2, math.pi], reference.dof)
+    configs = reference.configurations(Q)
+    assert configs.shape == (50, reference.model.nq)
+    for q, config in zip(Q, configs, strict=True):
+        np.testing.assert_array_equal(config, reference.configuration(q))
+    for convention in CONVENTIONS:
+        batch = reference.jacobians(Q, reference=convention)
+        assert batch.shape == (50, 6, reference.dof)
+        for q, J in zip(Q, batch, strict=True):
+            np.testing.assert_array_equal(J, reference.jacobian(q, reference=convention))
+    np.testing.assert_array_equal(reference.configurations(Q[3]), configs[3:4])
+    bad = Q.copy()
+    bad[7, -1] = np.nan
+    with pytest.raises(dhkin.InputError, match="finite"):
+        reference.jacobians(bad)
+    with pytest.raises(dhkin.InputError, match=r"shape"):
+        reference.configurations(Q[:, :-1])
+    with pytest.raises(dhkin.InputError, match="reference: expected one of"):
+        reference.jacobians(Q, reference="global")  # type: ignore[arg-type]

@@ -53,13 +53,13 @@ def rng_for(name: str, salt: str = "") -> np.random.Generator:
 def pinocchio_det(robot: dhkin.Robot, Q: NDArray[np.float64], frame: str | None = None,
                   reference: str = "local_world_aligned") -> NDArray[np.float64]:
     ref = robot.reference()
-    return np.array([np.linalg.det(ref.jacobian(q, frame, reference)) for q in Q])
+    return np.linalg.det(ref.jacobians(Q, frame, reference))
 
 
 def cofactor_scale(robot: dhkin.Robot, Q: NDArray[np.float64]) -> NDArray[np.float64]:
     """sigma_1 ... sigma_5 of Pinocchio's Jacobian at each q."""
     ref = robot.reference()
-    return np.array([np.prod(np.linalg.svd(ref.jacobian(q), compute_uv=False)[:5]) for q in Q])
+    return np.prod(np.linalg.svd(ref.jacobians(Q), compute_uv=False)[:, :5], axis=1)
 
 
 def exit_rate(robot: dhkin.Robot, q: NDArray[np.float64], kind: str) -> float:

@@ -180,15 +180,28 @@ class Reference:
     def configuration(self, q: ArrayLike) -> NDArray[np.float64]:
         """Chain-order joint vector (dof,) -> Pinocchio configuration (nq,); InputError unless
         ``q`` is ``dof`` finite numbers."""
-        values = joint_vector(q, self.dof)
+        return self._configurations(joint_vector(q, self.dof)[None])[0]
+
+    def configurations(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Chain-order joint vectors (N, dof) -> Pinocchio configurations (N, nq), checked once
+        for the whole batch (a sweep's loop then calls Pinocchio on each row without checking
+        it again); InputError unless ``q`` is (N, dof) or (dof,) finite numbers."""
+        Q, _ = joint_batch(q, self.dof)
+        return self._configurations(Q)
+
+    def _configurations(self, Q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Checked joint vectors (N, dof) -> configurations (N, nq): a continuous joint's value
+        as (cos, sin), the others as they are, joints outside the chain at neutral."""
         if self._direct:
-            return values
-        config = pin.neutral(self.model)
-        for value, idx, continuous in zip(values, self._idx_q, self._continuous, strict=True):
+            return Q
+        config = np.repeat(pin.neutral(self.model)[None], len(Q), axis=0)
+        for column, (idx, continuous) in enumerate(zip(self._idx_q, self._continuous,
+                                                       strict=True)):
             if continuous:
-                config[idx:idx + 2] = (np.cos(value), np.sin(value))
+                config[:, idx] = np.cos(Q[:, column])
+                config[:, idx + 1] = np.sin(Q[:, column])
             else:
-                config[idx] = value
+                config[:, idx] = Q[:, column]
         return config
 
     def fk(self, q: ArrayLike, frame: str | None = None) -> NDArray[np.float64]:
@@ -197,9 +210,9 @@ class Reference:
         Q, single = joint_batch(q, self.dof)
         out = np.empty((Q.shape[0], 4, 4))
         model, data = self.model, self.data
-        for k, row in enumerate(Q):
+        for k, config in enumerate(self._configurations(Q)):
             # Joint placements, then only the frames asked for (not every frame of the model).
-            pin.forwardKinematics(model, data, row if self._direct else self.configuration(row))
+            pin.forwardKinematics(model, data, config)
             placement = pin.updateFramePlacement(model, data, frame_id)
             if self._base_id is not None:
                 base = pin.updateFramePlacement(model, data, self._base_id)
@@ -222,12 +235,25 @@ class Reference:
         The "world" is the ``base`` frame when one was given (the frame :meth:`fk` poses are
         relative to), else the root link.
         """
-        if not isinstance(reference, str) or reference not in REFERENCE_FRAMES:
-            raise InputError(f"reference: expected one of {list(REFERENCE_FRAMES)}, "
-                             f"got {reference!r}", field="reference", value=reference,
-                             expected=f"one of {list(REFERENCE_FRAMES)}")
+        _check_reference_frame(reference)
         frame_id = self._tip_id if frame is None else self.frame_id(frame)
-        config = self.configuration(q)
+        return self._jacobian(self.configuration(q), frame_id, reference)
+
+    def jacobians(self, q: ArrayLike, frame: str | None = None,
+                  reference: ReferenceFrameName = "local_world_aligned") -> NDArray[np.float64]:
+        """:meth:`jacobian` of each row of ``q`` (N, dof) -> (N, 6, dof), the joint values
+        checked once for the whole batch."""
+        _check_reference_frame(reference)
+        frame_id = self._tip_id if frame is None else self.frame_id(frame)
+        configs = self.configurations(q)
+        out = np.empty((len(configs), 6, self.dof))
+        for k, config in enumerate(configs):
+            out[k] = self._jacobian(config, frame_id, reference)
+        return out
+
+    def _jacobian(self, config: NDArray[np.float64], frame_id: int,
+                  reference: ReferenceFrameName) -> NDArray[np.float64]:
+        """The Jacobian of :meth:`jacobian` at a Pinocchio configuration."""
         # Pinocchio hands a one-column Jacobian (nv = 1) back as a vector: keep it 6 x nv.
         J = np.reshape(pin.computeFrameJacobian(self.model, self.data, config, frame_id,
                                                 REFERENCE_FRAMES[reference]),
@@ -254,6 +280,14 @@ class Reference:
             sigma_min=sigma_min,
             condition=float(sigma[0] / sigma_min) if sigma_min > 0 else float("inf"),
         )
+
+
+def _check_reference_frame(reference: object) -> None:
+    """InputError unless ``reference`` names one of :data:`REFERENCE_FRAMES`."""
+    if not isinstance(reference, str) or reference not in REFERENCE_FRAMES:
+        raise InputError(f"reference: expected one of {list(REFERENCE_FRAMES)}, "
+                         f"got {reference!r}", field="reference", value=reference,
+                         expected=f"one of {list(REFERENCE_FRAMES)}")
 
 
 class _Report:

@@ -94,9 +94,10 @@ class RootReference:
         position, rotation = pose_error(self.model.fk(roots),
                                         np.broadcast_to(T, (len(roots), 4, 4)))
         roots = roots[(position <= allowed) & (rotation <= allowed)]
-        sigma = np.array([np.linalg.svd(self.model.reference.jacobian(q), compute_uv=False)[-1]
-                          for q in roots])
-        return roots[sigma >= ISOLATED] if len(roots) else roots
+        if not len(roots):
+            return roots
+        sigma = np.linalg.svd(self.model.reference.jacobians(roots), compute_uv=False)[:, -1]
+        return roots[sigma >= ISOLATED]
 
     def _in_limits(self, roots: NDArray[np.float64]) -> NDArray[np.float64]:
         """Each root's 2pi copy nearest the middle of the limits, those within them."""

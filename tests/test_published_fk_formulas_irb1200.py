@@ -224,10 +224,9 @@ def seed_link_matrices(theta: Array) -> list[Array]:
     ]
 
 
-def pinocchio_dh_frames(q: Array) -> list[Array]:
-    """DH frames 0..6 from Pinocchio: F_{i-1} = link_i Rz(-theta_i) (standard DH, urdf.py), and
-    F_6 = tool0 (the table's tool is the identity)."""
-    robot = dhkin.load(ROBOT)
+def pinocchio_dh_frames(robot: dhkin.Robot, q: Array) -> list[Array]:
+    """DH frames 0..6 of ``robot`` from Pinocchio: F_{i-1} = link_i Rz(-theta_i) (standard DH,
+    urdf.py), and F_6 = tool0 (the table's tool is the identity)."""
     reference = robot.reference()
     theta, _ = robot.table.dh_parameters(q[None, :])
     frames = [reference.fk(q, frame=j.link) @ rot_z(-theta[0, i])
@@ -239,11 +238,12 @@ def test_seed_link_matrices_and_wrist_transform() -> None:
     """Each printed A_i equals F_{i-1}^-1 F_i from Pinocchio at theta = q + offset, and the
     printed 3_6T = A_4 A_5 A_6 (its p column D4 + D6 c5 included) equals F_3^-1 F_6."""
     D4, D6 = dimensions()[3:]
-    table = dhkin.load(ROBOT).table
+    robot = dhkin.load(ROBOT)
+    table = robot.table
     for q in table.random_q(200, np.random.default_rng(4)):
         theta, _ = table.dh_parameters(q[None, :])
         A = seed_link_matrices(theta[0])
-        F = pinocchio_dh_frames(q)
+        F = pinocchio_dh_frames(robot, q)
         for i in range(6):
             np.testing.assert_allclose(A[i], invert(F[i]) @ F[i + 1], rtol=0, atol=TOLERANCE)
         c4, s4, c5, s5, c6, s6 = (f(theta[0, k]) for k in (3, 4, 5) for f in (np.cos, np.sin))

@@ -279,12 +279,15 @@ class Answer {
   std::size_t count() const { return stored_; }
   // The number of solutions, or -1 when the pose or the seed was rejected (info.status).
   long found() const { return info.status == dhkin::kUsable ? static_cast<long>(stored_) : -1; }
+  // Field by field: `solution` was just written that way, and a copy of the whole struct would
+  // load it back in wider pieces, which waits until those stores retire.
   void add(const dhkin::Solution& solution) {
-    if (stored_ < first_.size()) {
-      first_[stored_] = solution;
-    } else {
-      more_.push_back(solution);
-    }
+    dhkin::Solution& to = stored_ < first_.size() ? first_[stored_] : more_.emplace_back();
+    for (int j = 0; j < kDof; ++j) to.q[j] = solution.q[j];
+    to.branch = solution.branch;
+    to.flags = solution.flags;
+    to.error.position = solution.error.position;
+    to.error.rotation = solution.error.rotation;
     ++stored_;
   }
   const dhkin::Solution& at(std::size_t i) const {
@@ -366,6 +369,48 @@ struct CallPlan {
   const dhkin::Plan* plan;
 };
 
+// The doubles of a C-contiguous float64 array of `shape` through the buffer protocol, held for
+// the view's life; any other object (another dtype, shape or layout, a list) is a TypeError, as
+// nanobind's ndarray caster gives for what it cannot take as it is: solve_one then takes its
+// checked path, which converts or says what is wrong. A numpy array's buffer costs less than its
+// DLPack capsule (nanobind's route: a capsule and two allocations per call, ~5 % of a single
+// call).
+class DoublesView {
+ public:
+  DoublesView(nb::handle array, std::initializer_list<Py_ssize_t> shape) {
+    if (PyObject_GetBuffer(array.ptr(), &view_, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
+      PyErr_Clear();
+      throw nb::type_error("expected a C-contiguous float64 array");
+    }
+    bool fits = view_.itemsize == sizeof(double) && view_.format != nullptr &&
+                native_double(view_.format) && view_.ndim == static_cast<int>(shape.size());
+    int k = 0;
+    for (Py_ssize_t extent : shape) fits = fits && k < view_.ndim && view_.shape[k++] == extent;
+    if (!fits) {
+      PyBuffer_Release(&view_);
+      throw nb::type_error("expected a C-contiguous float64 array of the call's shape");
+    }
+  }
+  DoublesView(const DoublesView&) = delete;
+  DoublesView& operator=(const DoublesView&) = delete;
+  ~DoublesView() { PyBuffer_Release(&view_); }
+
+  const double* data() const { return static_cast<const double*>(view_.buf); }
+
+ private:
+  // struct-module format of a native double: "d", or "d" after "@", "=" or the native order
+  static bool native_double(const char* format) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    constexpr char kNativeOrder = '>';
+#else
+    constexpr char kNativeOrder = '<';
+#endif
+    if (format[0] == '@' || format[0] == '=' || format[0] == kNativeOrder) ++format;
+    return format[0] == 'd' && format[1] == '\0';
+  }
+  Py_buffer view_{};
+};
+
 class ClosedForm {
  public:
   ClosedForm(const nb::dict& plan, Input<double, nb::shape<2, 4, 4>> frames)
@@ -374,9 +419,12 @@ class ClosedForm {
 
   // One pose (4 x 4, base_link -> tool0, or -> the TCP of `frames`): its Answer. Without a
   // seed the seed is zero; without frames, the table's own base and tool.
-  Answer solve(Input<double, nb::shape<4, 4>> T, std::optional<Input<double, nb::shape<kDof>>> seed,
-               double tolerance, std::optional<Input<double, nb::shape<2, 4, 4>>> frames,
-               bool copies) const {
+  // T (4, 4) and the seed (kDof,) are C-contiguous float64 arrays (DoublesView).
+  Answer solve(nb::handle T_array, nb::handle seed_array, double tolerance,
+               std::optional<Input<double, nb::shape<2, 4, 4>>> frames, bool copies) const {
+    const DoublesView T(T_array, {4, 4});
+    std::optional<DoublesView> seed;
+    if (!seed_array.is_none()) seed.emplace(seed_array, std::initializer_list<Py_ssize_t>{kDof});
     const dhkin::TargetFrames targets =
         frames ? target_frames(*frames) : solver_.default_frames();
     std::unique_ptr<dhkin::Plan> storage;  // the plan of a TCP of the call's own

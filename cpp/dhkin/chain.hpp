@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cmath>
+#include <new>
 #include <vector>
 
 #include "dhkin/angles.hpp"
@@ -118,8 +119,13 @@ struct ChainShape {
   ConstantShape before[kDof];
   ConstantShape tail;
 
+  // Each shape built in place: a copy of one just written field by field loads it back in wider
+  // pieces than it was stored, which waits until those stores retire (perf: ~10 % of a single
+  // call's FK check).
   explicit ChainShape(const Chain& chain) : tail(chain.tail) {
-    for (int j = 0; j < chain.dof() && j < kDof; ++j) before[j] = ConstantShape(chain.joints[j].before);
+    for (int j = 0; j < chain.dof() && j < kDof; ++j) {
+      new (&before[j]) ConstantShape(chain.joints[j].before);
+    }
   }
 };
 

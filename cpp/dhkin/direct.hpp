@@ -52,8 +52,16 @@ inline bool projected_pose(const double* T, const Joints& seed, int& status, dou
 template <class V>
 inline void targets_of(const TargetFrames& frames, const FrameT<V>& projected, FrameT<V>& T_dh,
                        FrameT<V>& T_at) {
-  T_dh = frames.base_inverse * projected * frames.tool_inverse;
-  T_at = moved_to(T_dh, frames.tcp_point);
+  // moved_to's values, each element written once: a frame copied whole right after its elements
+  // were written one by one loads them back in wider pieces, which waits until the stores retire
+  const FrameT<V> dh = frames.base_inverse * projected * frames.tool_inverse;
+  const Vec3T<V> shift = dh.rotate(frames.tcp_point);
+  const V moves[3] = {shift.x, shift.y, shift.z};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) T_dh.R[r][c] = T_at.R[r][c] = dh.R[r][c];
+    T_dh.p[r] = dh.p[r];
+    T_at.p[r] = dh.p[r] + moves[r];
+  }
 }
 
 // Step 1 without the bookkeeping: the pose's status, the projection's size and the targets.

@@ -105,6 +105,32 @@ DHKIN_INLINE bool any(Ints m) {
 #endif
 }
 
+// Element i of a part takes element i ^ m (0 <= m < kNative): shuffles within one register
+// (lane by lane, a vector load would wait for the element stores; see Lanes::gather).
+#if defined(__clang__)
+#define DHKIN_SHUFFLE(a, ...) __builtin_shufflevector(a, a, __VA_ARGS__)
+#else
+#define DHKIN_SHUFFLE(a, ...) __builtin_shuffle(a, Ints{__VA_ARGS__})
+#endif
+template <class Vector>
+DHKIN_INLINE Vector swapped_within(Vector a, int m) {
+#if DHKIN_NATIVE_WIDTH == 4
+  switch (m) {
+    case 1: return DHKIN_SHUFFLE(a, 1, 0, 3, 2);
+    case 2: return DHKIN_SHUFFLE(a, 2, 3, 0, 1);
+    case 3: return DHKIN_SHUFFLE(a, 3, 2, 1, 0);
+    default: return a;
+  }
+#elif DHKIN_NATIVE_WIDTH == 2
+  return m == 1 ? DHKIN_SHUFFLE(a, 1, 0) : a;
+#else
+  Vector out;
+  for (int i = 0; i < kNative; ++i) out[i] = a[i ^ m];
+  return out;
+#endif
+}
+#undef DHKIN_SHUFFLE
+
 }  // namespace simd
 
 // A true or false per lane (all bits set, or none).
@@ -128,10 +154,23 @@ struct Lanes {
   }
   void store(double* data) const { std::memcpy(data, &v, sizeof v); }
   // Lane l of values at `data` with this stride (doubles).
+  // Built in registers: a vector load of values just stored one by one would wait until the
+  // stores retire (a load wider than the stores that wrote its bytes cannot take them from the
+  // store buffer).
   static Lanes gather(const double* data, int stride) {
-    alignas(64) double values[kLanes];
-    for (int l = 0; l < kLanes; ++l) values[l] = data[l * stride];
-    return load(values);
+    Lanes out;
+    for (int k = 0; k < simd::kParts; ++k) {
+      const double* d = data + k * simd::kNative * stride;
+#if DHKIN_NATIVE_WIDTH == 8
+      out.v[k] = simd::Doubles{d[0],          d[stride],     d[2 * stride], d[3 * stride],
+                               d[4 * stride], d[5 * stride], d[6 * stride], d[7 * stride]};
+#elif DHKIN_NATIVE_WIDTH == 4
+      out.v[k] = simd::Doubles{d[0], d[stride], d[2 * stride], d[3 * stride]};
+#else
+      out.v[k] = simd::Doubles{d[0], d[stride]};
+#endif
+    }
+    return out;
   }
   double operator[](int l) const { return v[l / simd::kNative][l % simd::kNative]; }
   void set(int l, double x) { v[l / simd::kNative][l % simd::kNative] = x; }
@@ -295,13 +334,17 @@ DHKIN_INLINE Lanes swapped(const Lanes& a, int m) {
   return out;
 #else
   Lanes out;
-  for (int l = 0; l < kLanes; ++l) out.set(l, a[l ^ m]);
+  for (int k = 0; k < simd::kParts; ++k) {
+    out.v[k] = simd::swapped_within(a.v[k ^ (m / simd::kNative)], m % simd::kNative);
+  }
   return out;
 #endif
 }
 DHKIN_INLINE Mask swapped(const Mask& a, int m) {
   Mask out;
-  for (int l = 0; l < kLanes; ++l) set_lane(out, l, lane(a, l ^ m));
+  for (int k = 0; k < simd::kParts; ++k) {
+    out.v[k] = simd::swapped_within(a.v[k ^ (m / simd::kNative)], m % simd::kNative);
+  }
   return out;
 }
 

@@ -49,6 +49,7 @@ DEFAULT_CHUNK = 65536
 #: solve_one's common call, looked up once.
 _INFINITY = math.inf
 _from_core = IKSolutions.from_core
+_new_solutions = object.__new__
 
 #: solve_chunks' default chunks hold at most this much output (bytes).
 STREAM_BYTES = 64 * 2**20
@@ -148,7 +149,11 @@ class ClosedFormSolver:
             if answer is not None:
                 found = answer.found  # solutions; -1: the pose or the seed was rejected
                 if found > 0:
-                    return _from_core(answer, self.family, self._configure)
+                    # IKSolutions.from_core's three stores, without its call (~2 % of a call)
+                    result = _new_solutions(IKSolutions)
+                    result._answer, result._configure, result._family = (
+                        answer, self._configure, self.family)
+                    return result
                 if found == 0:
                     return self._solutions(answer, tolerance)
         return self._solve_checked(T, q_seed, tolerance, tcp, copies)

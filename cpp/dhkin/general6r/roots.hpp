@@ -281,9 +281,8 @@ inline int basin_of(const Joints& q, const std::vector<Root>& roots, double lips
 
 // A real start's full steps, taken ahead (settle: full_steps_lanes, eight starts at a time).
 struct QuickStart {
-  bool taken = false;  // full_steps() of this start was run in lanes
-  FullStepRoot root;   // what it reached (converged or not)
-  Joints q{};          // the root where converged
+  FullStepRoot root;  // what full_steps() reached (converged or not)
+  Joints q{};         // the root where converged
 };
 
 // A start of a real eigenvalue (simple, or a cluster's split; not a complex pair's, not an
@@ -292,16 +291,12 @@ inline bool takes_full_steps(const Start& start) {
   return start.origin < kMoved && (start.origin & (kPaired | kIll)) == 0;
 }
 
-// Starts run in lanes together only where at least this many fill them: a lane run costs about
-// what two scalar runs of full_steps() do (a Lanes value is two AVX vectors of four, and the
-// lanes step until the slowest converges; measured, docs/general6r.md "Speed, eighth pass"), so
-// fewer starts stay on the scalar path.
-constexpr int kFewestLanes = 3;
-
-// full_steps() of every start that takes them (takes_full_steps), eight at a time in lanes. Each
-// lane's values are full_steps()' (full_steps_lanes), so settle() uses them in place of its own
-// call, in the same order, and nothing it decides changes. A cluster's start that settle() then
-// finds in a known root's basin was run for nothing; the lanes cost it little.
+// full_steps() of every start that takes them (takes_full_steps), eight at a time in lanes, the
+// last group however few (running one or two starts alone on the scalar path instead measured
+// the same: docs/general6r.md, "Speed, eighth pass"). Each lane's values are full_steps()'
+// (full_steps_lanes), so settle() uses them in place of its own call, in the same order, and
+// nothing it decides changes. A cluster's start that settle() then finds in a known root's basin
+// was run for nothing; the lanes cost it little.
 inline std::vector<QuickStart> full_steps_ahead(const Chain& chain, const ChainShape& shape,
                                                 const Frame& target,
                                                 const std::vector<Start>& starts, double goal,
@@ -313,7 +308,6 @@ inline std::vector<QuickStart> full_steps_ahead(const Chain& chain, const ChainS
   }
   for (std::size_t first = 0; first < real.size(); first += kLanes) {
     const int count = static_cast<int>(std::min<std::size_t>(kLanes, real.size() - first));
-    if (count < kFewestLanes) break;
     JointsT<Lanes> q;
     Mask active = uniform(false);
     for (int l = 0; l < kLanes; ++l) {
@@ -325,7 +319,6 @@ inline std::vector<QuickStart> full_steps_ahead(const Chain& chain, const ChainS
     const FullStepLanes lanes = full_steps_lanes(chain, shape, target, q, active, goal, lever);
     for (int l = 0; l < count; ++l) {
       QuickStart& quick = out[real[first + l]];
-      quick.taken = true;
       quick.root.converged = lane(lanes.converged, l);
       if (!quick.root.converged) continue;
       quick.root.error = lane(lanes.error, l);
@@ -339,7 +332,8 @@ inline std::vector<QuickStart> full_steps_ahead(const Chain& chain, const ChainS
 // Refine every start on the exact chain, keep those that verify at `tolerance`, merge those
 // that are one root. Only the elimination's starts are starts: the seed never is (it chooses
 // among the roots, it does not find them). A start of a real eigenvalue takes full Newton steps
-// first (full_steps), refine() where they do not reach the rounding; paired starts go to
+// first (full_steps, run ahead eight starts at a time: full_steps_ahead), refine() where they do
+// not reach the rounding; paired starts go to
 // refine_paired(). The roots reached from
 // shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
 // probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
@@ -389,15 +383,9 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
       refine_paired(chain, target, q, goal, lever);
       error = check(chain, q.data(), target);
     } else {
-      const QuickStart& taken = ahead[index];
-      FullStepRoot quick;
-      if (taken.taken) {
-        quick = taken.root;
-        if (quick.converged) q = taken.q;
-      } else {
-        quick = full_steps(chain, shape, target, q, goal, lever);
-      }
+      const FullStepRoot& quick = ahead[index].root;  // full_steps() from the start
       if (quick.converged) {
+        q = ahead[index].q;
         error = quick.error;
         sigma_bound = quick.sigma_bound;
       } else {

@@ -22,7 +22,10 @@
 #include <utility>
 
 #include "dhkin/chain.hpp"
+#include "dhkin/family.hpp"
+#include "dhkin/general6r/square_lu.hpp"
 #include "dhkin/newton.hpp"
+#include "dhkin/simd.hpp"
 
 namespace dhkin::general6r {
 
@@ -36,30 +39,39 @@ constexpr double kRoundingUlps = 4.0;
 
 using Jacobian = Eigen::Matrix<double, 6, kDof, Eigen::RowMajor>;
 
-// The chain at one set of joint values: the frames each joint moves about and the end frame
-// (chain_frames: fk()'s and fk_frames' values), the error twist against the target and its size.
-struct Evaluation {
-  std::array<Frame, kDof + 1> frames;
-  Eigen::Matrix<double, 6, 1> e;
-  PoseError error;
-  double size = 0.0;  // position^2 + rotation^2
+// The chain at one set of joint values (per lane for V = Lanes): the frames each joint moves
+// about and the end frame (chain_frames: fk()'s and fk_frames' values), the error twist against
+// the target and its size.
+template <class V>
+struct EvaluationT {
+  std::array<FrameT<V>, kDof + 1> frames;
+  V e[6];
+  PoseErrorT<V> error;
+  V size{};  // position^2 + rotation^2
 };
+using Evaluation = EvaluationT<double>;
 
-inline void evaluate(const Chain& chain, const ChainShape& shape, const Joints& q,
-                     const Frame& target, Evaluation& out) {
-  JointMotions<double> motions;
+template <class V>
+DHKIN_INLINE void evaluate(const Chain& chain, const ChainShape& shape, const JointsT<V>& q,
+                           const Frame& target, EvaluationT<V>& out) {
+  JointMotions<V> motions;
   joint_motions(chain, q.data(), motions);
   chain_frames(chain, shape, motions, out.frames.data());
-  out.error = error_twist(out.frames[kDof], target, out.e.data());
+  out.error = error_twist(out.frames[kDof], target, out.e);
   out.size = out.error.position * out.error.position + out.error.rotation * out.error.rotation;
 }
 
-// 1 / |J^-1|_F of J, a lower bound of its smallest singular value (within sqrt(6) of it; 0 where
-// J is singular or not finite).
-inline double singular_bound(const Jacobian& J) {
-  const double inverse_size = J.partialPivLu().inverse().norm();
-  return inverse_size < INFINITY ? 1.0 / inverse_size : 0.0;
+// 1 / |J^-1|_F of J (row-major 6 x 6 values, per lane), a lower bound of its smallest singular
+// value (within sqrt(6) of it; 0 where J is singular or not finite).
+template <class V>
+DHKIN_INLINE V singular_bound_of(const V* J) {
+  SquareLU<V> lu;
+  lu_factor6(J, lu);
+  const V inverse_size = inverse_norm6(lu);
+  return select(inverse_size < INFINITY, 1.0 / inverse_size, V(0.0));
 }
+
+inline double singular_bound(const Jacobian& J) { return singular_bound_of(J.data()); }
 
 // What full_steps() reached.
 struct FullStepRoot {
@@ -70,7 +82,8 @@ struct FullStepRoot {
 
 // Whether an error is at the rounding (kRoundingUlps, per metre of `lever`) and within
 // newton::kRefineFraction of `goal`: where full_steps() stops.
-inline bool at_rounding(const PoseError& e, double goal, double lever) {
+template <class V>
+DHKIN_INLINE MaskOf<V> at_rounding(const PoseErrorT<V>& e, double goal, double lever) {
   const double ulp = std::numeric_limits<double>::epsilon() * kRoundingUlps;
   const double converged = newton::kRefineFraction * goal;
   return e.position <= ulp * lever && e.rotation <= ulp && e.position <= converged &&
@@ -95,11 +108,14 @@ inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, cons
   Jacobian J;
   for (int step = 0; step < kFullSteps && !done(now.error); ++step) {
     jacobian(chain, now.frames.data(), J.data());
-    const Eigen::Matrix<double, kDof, 1> dq = J.partialPivLu().solve(now.e);
+    SquareLU<double> lu;
+    lu_factor6(J.data(), lu);
+    double dq[kDof];
+    lu_solve6(lu, now.e, dq);
     Joints next;
     for (int j = 0; j < kDof; ++j) {
-      if (!(std::abs(dq(j)) <= newton::kMaxJointStep)) return out;  // also NaN
-      next[j] = current[j] + dq(j);
+      if (!(std::abs(dq[j]) <= newton::kMaxJointStep)) return out;  // also NaN
+      next[j] = current[j] + dq[j];
     }
     evaluate(chain, shape, next, target, trial);
     if (!(trial.size * newton::kPolishGain <= now.size)) return out;
@@ -113,6 +129,77 @@ inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, cons
   out.error = pose_error(now.frames[kDof], target);
   out.sigma_bound = singular_bound(J);
   q = current;
+  return out;
+}
+
+// What full_steps_lanes() reached, per lane (full_steps()' FullStepRoot).
+struct FullStepLanes {
+  Mask converged = uniform(false);
+  PoseErrorT<Lanes> error;
+  Lanes sigma_bound;
+};
+
+// now = trial in the lanes `taken`.
+DHKIN_INLINE void take_lanes(Mask taken, const EvaluationT<Lanes>& trial,
+                             EvaluationT<Lanes>& now) {
+  for (int f = 0; f <= kDof; ++f) {
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        now.frames[f].R[r][c] = select(taken, trial.frames[f].R[r][c], now.frames[f].R[r][c]);
+      }
+      now.frames[f].p[r] = select(taken, trial.frames[f].p[r], now.frames[f].p[r]);
+    }
+  }
+  for (int r = 0; r < 6; ++r) now.e[r] = select(taken, trial.e[r], now.e[r]);
+  now.error.position = select(taken, trial.error.position, now.error.position);
+  now.error.rotation = select(taken, trial.error.rotation, now.error.rotation);
+  now.size = select(taken, trial.size, now.size);
+}
+
+// full_steps() from up to kLanes starts at once, one per lane of q, in the lanes `active`: each
+// lane takes full_steps()' operations on its own values (the lane type's arithmetic is the
+// double's, square_lu.hpp's LU is the scalar path's), so a lane converges exactly where
+// full_steps() would from that start, with the same root, error and singular bound, bit for
+// bit. A lane stops at its own rounding, at a step beyond kMaxJointStep or one that does not
+// gain kPolishGain-fold, as full_steps() does; the others step on. Converged lanes of q (in
+// place) hold their roots; the others are left as they were.
+inline FullStepLanes full_steps_lanes(const Chain& chain, const ChainShape& shape,
+                                      const Frame& target, JointsT<Lanes>& q, Mask active,
+                                      double goal, double lever) {
+  FullStepLanes out;
+  EvaluationT<Lanes> now, trial;
+  JointsT<Lanes> current = q;
+  evaluate(chain, shape, current, target, now);
+  Mask stopped = !active;  // failed (or not a start): never converges
+  Lanes J[6 * kDof];
+  for (int step = 0; step < kFullSteps; ++step) {
+    const Mask running = !stopped && !at_rounding(now.error, goal, lever);
+    if (!any(running)) break;
+    jacobian(chain, now.frames.data(), J);
+    SquareLU<Lanes> lu;
+    lu_factor6(J, lu);
+    Lanes dq[kDof];
+    lu_solve6(lu, now.e, dq);
+    Mask within = uniform(true);
+    for (int j = 0; j < kDof; ++j) within = within && abs(dq[j]) <= newton::kMaxJointStep;
+    stopped = stopped || (running && !within);  // also NaN
+    const Mask stepping = running && within;
+    JointsT<Lanes> next;
+    for (int j = 0; j < kDof; ++j) next[j] = select(stepping, current[j] + dq[j], current[j]);
+    evaluate(chain, shape, next, target, trial);
+    const Mask gains = trial.size * newton::kPolishGain <= now.size;
+    stopped = stopped || (stepping && !gains);
+    const Mask taken = stepping && gains;
+    for (int j = 0; j < kDof; ++j) current[j] = select(taken, next[j], current[j]);
+    take_lanes(taken, trial, now);
+  }
+  out.converged = !stopped && at_rounding(now.error, goal, lever);
+  if (!any(out.converged)) return out;
+  jacobian(chain, now.frames.data(), J);
+  for (int i = 0; i < 3 * kDof; ++i) J[i] = J[i] / lever;
+  out.error = pose_error(now.frames[kDof], target);
+  out.sigma_bound = singular_bound_of(J);
+  for (int j = 0; j < kDof; ++j) q[j] = select(out.converged, current[j], q[j]);
   return out;
 }
 

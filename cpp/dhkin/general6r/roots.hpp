@@ -18,6 +18,7 @@
 #include "dhkin/newton.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/right_svd.hpp"
+#include "dhkin/simd.hpp"
 
 // Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
 extern template Eigen::JacobiSVD<dhkin::general6r::Jacobian>&
@@ -278,10 +279,61 @@ inline int basin_of(const Joints& q, const std::vector<Root>& roots, double lips
   return -1;
 }
 
+// A real start's full steps, taken ahead (settle: full_steps_lanes, eight starts at a time).
+struct QuickStart {
+  FullStepRoot root;  // what full_steps() reached (converged or not)
+  Joints q{};         // the root where converged
+};
+
+// A start of a real eigenvalue (simple, or a cluster's split; not a complex pair's, not an
+// ill-conditioned or moved pose's): full_steps() first.
+inline bool takes_full_steps(const Start& start) {
+  return start.origin < kMoved && (start.origin & (kPaired | kIll)) == 0;
+}
+
+// full_steps() of every start that takes them (takes_full_steps), eight at a time in lanes, the
+// last group however few (running one or two starts alone on the scalar path instead measured
+// the same: docs/general6r.md, "Speed, eighth pass"). Each lane's values are full_steps()'
+// (full_steps_lanes), so settle() uses them in place of its own call, in the same order, and
+// nothing it decides changes. A cluster's start that settle() then finds in a known root's basin
+// was run for nothing; the lanes cost it little.
+inline std::vector<QuickStart> full_steps_ahead(const Chain& chain, const ChainShape& shape,
+                                                const Frame& target,
+                                                const std::vector<Start>& starts, double goal,
+                                                double lever) {
+  std::vector<QuickStart> out(starts.size());
+  std::vector<int> real;
+  for (std::size_t index = 0; index < starts.size(); ++index) {
+    if (takes_full_steps(starts[index])) real.push_back(static_cast<int>(index));
+  }
+  for (std::size_t first = 0; first < real.size(); first += kLanes) {
+    const int count = static_cast<int>(std::min<std::size_t>(kLanes, real.size() - first));
+    JointsT<Lanes> q;
+    Mask active = uniform(false);
+    for (int l = 0; l < kLanes; ++l) {
+      // an idle lane repeats the first start (finite values; its result is not used)
+      const Joints& start = starts[real[first + (l < count ? l : 0)]].q;
+      for (int j = 0; j < kDof; ++j) q[j].set(l, start[j]);
+      set_lane(active, l, l < count);
+    }
+    const FullStepLanes lanes = full_steps_lanes(chain, shape, target, q, active, goal, lever);
+    for (int l = 0; l < count; ++l) {
+      QuickStart& quick = out[real[first + l]];
+      quick.root.converged = lane(lanes.converged, l);
+      if (!quick.root.converged) continue;
+      quick.root.error = lane(lanes.error, l);
+      quick.root.sigma_bound = lane(lanes.sigma_bound, l);
+      for (int j = 0; j < kDof; ++j) quick.q[j] = q[j][l];
+    }
+  }
+  return out;
+}
+
 // Refine every start on the exact chain, keep those that verify at `tolerance`, merge those
 // that are one root. Only the elimination's starts are starts: the seed never is (it chooses
 // among the roots, it does not find them). A start of a real eigenvalue takes full Newton steps
-// first (full_steps), refine() where they do not reach the rounding; paired starts go to
+// first (full_steps, run ahead eight starts at a time: full_steps_ahead), refine() where they do
+// not reach the rounding; paired starts go to
 // refine_paired(). The roots reached from
 // shared ones (a cluster of eigenvalues), and every root of a moved pose, have their fold partner
 // probed where their singular value is at most kProbeSigma (a tilted-UR5 root 0.1 rad from its
@@ -308,7 +360,9 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
     return -1;
   };
   const double lipschitz = newton_lipschitz(chain, lever);
-  for (const Start& start : starts) {
+  const std::vector<QuickStart> ahead = full_steps_ahead(chain, shape, target, starts, goal, lever);
+  for (std::size_t index = 0; index < starts.size(); ++index) {
+    const Start& start = starts[index];
     const bool wants_probe = (start.origin & kShared) != 0 || moved_pose;
     // a cluster's start in a known root's basin reaches that root (the cluster's other members
     // split into the same roots' vectors; simple and paired starts were measured to lie in a
@@ -329,8 +383,9 @@ inline int settle(const Chain& chain, const Frame& target, const std::vector<Sta
       refine_paired(chain, target, q, goal, lever);
       error = check(chain, q.data(), target);
     } else {
-      const FullStepRoot quick = full_steps(chain, shape, target, q, goal, lever);
+      const FullStepRoot& quick = ahead[index].root;  // full_steps() from the start
       if (quick.converged) {
+        q = ahead[index].q;
         error = quick.error;
         sigma_bound = quick.sigma_bound;
       } else {

@@ -11,9 +11,12 @@ solver called without a seed and with the sampled q as seed:
 
 * reference roots: a multistart of ``--starts`` fixed starts (Newton on the exact chain, no
   elimination: :mod:`dhkin.validation.multistart`), each root verified on Pinocchio, isolated
-  (sigma_min of Pinocchio's Jacobian >= 1e-6) and with an in-limit 2pi copy;
+  (sigma_min of Pinocchio's Jacobian >= 1e-6) and with an in-limit 2pi copy; the validator's
+  definition: a root where Newton converged (error <= 1e-12), a near-root where it stalled
+  inside the tolerance (counted apart: the exact targets here leave none);
 * missing: reference roots the unseeded answer lacks (not within 1e-6 rad mod 2pi, nor one root
-  with a returned one: the segment between them verifies on Pinocchio at 1e-9);
+  with a returned one: the segment between them verifies on Pinocchio at 1e-9), and near-roots
+  it lacks (nor tied to a returned one along their valley, within 1e-9);
 * wrong: returned solutions off by more than 1e-9 on Pinocchio; the largest residual, and the
   rows above 1e-12 (of them, those flagged singular; apart, those set onto a joint limit: a
   root up to tolerance / lever outside a limit counts as on it, as in the families, and keeps
@@ -83,9 +86,10 @@ def measure(robot: Robot, solver: General6RSolver, Q: np.ndarray, starts: int,
     model = TargetModel(ReferenceSpec(kind="exact"), robot.reference())
     reference = RootReference(robot, model, starts=starts)
     targets = model.fk(Q)
-    figures = {"poses": len(Q), "reference_roots": 0, "missing": 0, "poses_missing": 0,
-               "wrong": 0, "worst": 0.0, "above_1e-12": 0, "above_1e-12_singular": 0,
-               "above_1e-12_on_limit": 0, "seed_dependent": 0, "odd": 0, "exceptions": 0}
+    figures = {"poses": len(Q), "reference_roots": 0, "near_roots": 0, "missing": 0,
+               "poses_missing": 0, "wrong": 0, "worst": 0.0, "above_1e-12": 0,
+               "above_1e-12_singular": 0, "above_1e-12_on_limit": 0, "seed_dependent": 0,
+               "odd": 0, "exceptions": 0}
     times = []
     for q, T in zip(Q, targets, strict=True):
         try:
@@ -97,9 +101,12 @@ def measure(robot: Robot, solver: General6RSolver, Q: np.ndarray, starts: int,
             figures["exceptions"] += 1
             report(f"  exception at q = {q.tolist()}: {type(exc).__name__}: {exc}")
             continue
-        roots = reference.roots(T, TOLERANCE)
-        figures["reference_roots"] += len(roots)
-        lacking = missing_roots(model, T, roots, unseeded.q, TOLERANCE, JOINT_TOLERANCE)
+        points = reference.points(T, TOLERANCE)
+        figures["reference_roots"] += len(points.roots)
+        figures["near_roots"] += len(points.near_roots)
+        lacking = missing_roots(model, T, points.roots, unseeded.q, TOLERANCE, JOINT_TOLERANCE)
+        lacking += missing_roots(model, T, points.near_roots, unseeded.q, TOLERANCE,
+                                 JOINT_TOLERANCE, along_valley=True)
         if lacking:
             figures["missing"] += len(lacking)
             figures["poses_missing"] += 1

@@ -20,6 +20,7 @@ import pytest
 import dhkin
 from dhkin.errors import InputError
 from dhkin.reference import Reference
+from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import invert, pose_error
 from dhkin.validation import (
     CONTINUITY_DISTANCE,
@@ -520,3 +521,78 @@ def test_validate_sees_the_roots_the_old_general_solver_lost() -> None:
     assert own.branch_checked >= report.branch_checked  # the broken IK fails some earlier
     assert own.ok and own.counts["missing_branch"] == 0 and own.counts["missing"] == 0
 
+
+
+#: The xArm6's sample 10510 of ``dhkin validate xarm6 -n 10000`` (deg): q5 = 180 deg, where the
+#: rounded reference breaks a curve of solutions into nearly singular roots and a valley of
+#: near-solutions between them (docs/general6r.md, "Near-roots").
+XARM6_BROKEN_CURVE = np.deg2rad([180.0, 90.0, -90.0, 180.0, 180.0, 180.0])
+
+
+def test_near_root_of_a_broken_curve_is_tied_along_its_valley() -> None:
+    """The multistart's point at the xArm6's sample 10510 (rounded reference) is a Newton
+    stall inside the tolerance, not a root (its error on the exact URDF stays above
+    CONVERGED): a near-root. The straight chord to the nearest returned row leaves the
+    tolerance (the valley bends), the walk along the valley does not, so the IK's answer
+    passes; without the rows on that valley the near-root is reported, never dropped."""
+    from dhkin.validation.multistart import (
+        CONVERGED,
+        RootReference,
+        check_reference,
+        missing_roots,
+    )
+
+    robot = dhkin.load("xarm6")
+    model = target_model(robot, "rounded")
+    T = model.fk(XARM6_BROKEN_CURVE)
+    # the deviation a run of this one sample sets (run.py: the largest over the samples)
+    model.deviation = float(max(pose_error(robot.fk(XARM6_BROKEN_CURVE), T)))
+    reference = RootReference(robot, model)
+    points = reference.points(T, DEFAULT_TOLERANCE)
+    assert len(points.roots) == 1 and len(points.near_roots) == 1
+    near = points.near_roots
+    error = max(pose_error(robot.reference().fk(near[0]), T))
+    assert error > 100 * CONVERGED  # a stall, not a root
+    Q = robot.ik(T).q
+    assert len(Q) == 3
+    assert missing_roots(model, T, near, Q, DEFAULT_TOLERANCE, 1e-6)  # the chord fails
+    assert not missing_roots(model, T, near, Q, DEFAULT_TOLERANCE, 1e-6, along_valley=True)
+    assert check_reference(model, reference, T, Q, DEFAULT_TOLERANCE, 1e-6)[0] == "success"
+    regular = Q[[k for k, flag in enumerate(robot.ik(T).flags) if "singular" not in flag]]
+    outcome, _, names = check_reference(model, reference, T, regular, DEFAULT_TOLERANCE, 1e-6)
+    assert outcome == "missing_branch" and names and names[0].startswith("near-root q=(")
+
+
+@pytest.mark.parametrize("side", [0.9, 1.1])
+def test_a_missing_root_is_reported_on_either_side_of_the_convergence_line(
+        side: float) -> None:
+    """A root of the exact chain moved off it along its Jacobian's strongest direction until
+    its error is just below (0.9 x CONVERGED: a root) or just above (1.1 x: a near-root) the
+    line: either way, when the IK's answer lacks it, it is reported (the walk along a valley
+    does not tie distinct roots); returned, it is matched."""
+    from dhkin.validation.multistart import CONVERGED, converged, missing_roots
+
+    robot = dhkin.load("xarm6")
+    exact = robot.reference()
+    model = target_model(robot, "exact")
+    q = np.array([0.3, -0.4, -1.2, 0.5, 0.9, -0.2])
+    T = exact.fk(q)
+    Q = robot.ik(T).q
+    nearest = int(np.argmin(np.abs(Q - q).max(axis=1)))
+    root = Q[nearest]
+    strongest = np.linalg.svd(exact.jacobian(root))[2][0]
+
+    def error(d: float) -> float:
+        return float(max(pose_error(exact.fk(root + d * strongest), T)))
+
+    d = 1e-12 * side * CONVERGED / error(1e-12)
+    moved = root + d * strongest
+    assert (error(d) < CONVERGED) == (side < 1)
+    assert bool(converged(exact, T, moved[None])[0]) == (side < 1)
+    others = np.delete(Q, nearest, axis=0)
+    along = side > 1  # a near-root is tied along a valley
+    lacking = missing_roots(model, T, moved[None], others, DEFAULT_TOLERANCE, 1e-6,
+                            along_valley=along)
+    assert len(lacking) == 1
+    assert not missing_roots(model, T, moved[None], Q, DEFAULT_TOLERANCE, 1e-6,
+                             along_valley=along)

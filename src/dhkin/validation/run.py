@@ -57,8 +57,11 @@ Outcome per sample (one each, the first that applies, in this order):
   other special-angle sample, every 10th near-singular and every 100th uniform one
   (:func:`~dhkin.validation.samples.reference_samples`); each must be within the joint
   tolerance of a solution of the IK called without a seed, or one root with it (the segment
-  between them solves the pose). Such IKs are called unseeded for every sample (a seed may
-  choose a free joint, in the continuity call below; it must not find roots). Checked for
+  between them solves the pose). A point where Newton stalls inside the tolerance without
+  converging (a near-root: :data:`~dhkin.validation.multistart.CONVERGED`) may instead be
+  tied to a solution along its valley of near-solutions (:mod:`dhkin.validation.valley`).
+  Such IKs are called unseeded for every sample (a seed may choose a free joint, in the
+  continuity call below; it must not find roots). Checked for
   robots with a complete IK (``robot.complete_ik``) and IKs that promise every solution
   (``complete_expected``);
 * ``discontinuous``: on the singular sets (:data:`CONTINUITY_SETS`), an IK that takes ``q_seed``

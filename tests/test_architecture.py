@@ -142,3 +142,26 @@ def test_modules_are_small() -> None:
             for name, path in _modules().items()}
     over = {name: lines for name, lines in long.items() if lines > MAX_LINES}
     assert not over, f"modules over {MAX_LINES} lines (one job each): {over}"
+
+
+#: Packages that `import dhkin` and a closed-form robot's first answer must not import: each
+#: costs a new process tenths of a second (scipy ~0.25 s, matplotlib, yourdfpy with trimesh
+#: ~3 s) or compiles at run time (numba). The cold start (README, scripts/cold_start.py) is
+#: import plus first answer; the modules that need one import it where they use it.
+HEAVY_IMPORTS = ("scipy", "matplotlib", "yourdfpy", "trimesh", "numba")
+
+
+def test_import_and_a_first_answer_import_no_heavy_package() -> None:
+    """A new process runs `import dhkin`, loads the UR5 and solves one pose: none of
+    HEAVY_IMPORTS is in sys.modules afterwards."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np, dhkin\n"
+            "robot = dhkin.load('ur5')\n"
+            "assert len(robot.ik(robot.fk(np.full(6, 0.3)))) > 0\n"
+            f"print(sorted(m for m in {HEAVY_IMPORTS!r} if m in sys.modules))\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "[]"

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from dhkin.transforms import pose_error
 from dhkin.validation.references import TargetModel
@@ -50,6 +49,10 @@ def _error(model: TargetModel, T: NDArray[np.float64],
     """(n, 6) pose errors of the rows q on the reference: the target's position minus the
     point's (m), and the rotation vector taking the point's orientation to the target's (rad,
     base axes)."""
+    # imported here: scipy costs `import dhkin` ~0.25 s (scripts/cold_start.py), and only a
+    # near-root's walk needs it
+    from scipy.spatial.transform import Rotation
+
     pose = model.fk(q)
     position = T[:3, 3] - pose[..., :3, 3]
     rotation = Rotation.from_matrix(T[:3, :3] @ np.swapaxes(pose[..., :3, :3], -1, -2))

@@ -31,7 +31,7 @@ from dhkin.arm import Arm
 from dhkin.reference import Reference
 from dhkin.transforms import pose_error
 from dhkin.validation.references import TargetModel
-from dhkin.validation.valley import tied_along_valley
+from dhkin.validation.valley import chord_verifies, tied_along_valley
 
 #: Starts per pose: the first points of a scrambled Halton sequence over the joint torus (fixed
 #: seed), which covers it more evenly than random points. Measured (docs/general6r.md,
@@ -183,9 +183,7 @@ def missing_roots(model: TargetModel, T: NDArray[np.float64], roots: NDArray[np.
         nearest = int(np.argmin(distance))
         if distance[nearest] <= joint_tolerance:
             continue
-        points = root + np.outer([0.25, 0.5, 0.75], step[nearest])
-        position, rotation = pose_error(model.fk(points), np.broadcast_to(T, (3, 4, 4)))
-        if np.all(position <= allowed) and np.all(rotation <= allowed):
+        if chord_verifies(model, T, root, step[nearest], allowed):
             continue
         if along_valley and any(
                 tied_along_valley(model, T, root, root + step[k], allowed, joint_tolerance)

@@ -81,10 +81,19 @@ def project(model: TargetModel, T: NDArray[np.float64],
     return q
 
 
-def _verifies(model: TargetModel, T: NDArray[np.float64], points: NDArray[np.float64],
-              allowed: float) -> bool:
+def verifies(model: TargetModel, T: NDArray[np.float64], points: NDArray[np.float64],
+             allowed: float) -> bool:
+    """Whether every row of ``points`` (n, dof) reaches the pose T on the reference within
+    ``allowed`` (m and rad)."""
     position, rotation = pose_error(model.fk(points), np.broadcast_to(T, (len(points), 4, 4)))
     return bool(np.all(position <= allowed) and np.all(rotation <= allowed))
+
+
+def chord_verifies(model: TargetModel, T: NDArray[np.float64], start: NDArray[np.float64],
+                   step: NDArray[np.float64], allowed: float) -> bool:
+    """The chord rule: whether the points a quarter, a half and three quarters of the way from
+    ``start`` along ``step`` (to the other end) all verify (:func:`verifies`)."""
+    return verifies(model, T, start + np.outer([0.25, 0.5, 0.75], step), allowed)
 
 
 def tied_along_valley(model: TargetModel, T: NDArray[np.float64], start: NDArray[np.float64],
@@ -103,7 +112,7 @@ def tied_along_valley(model: TargetModel, T: NDArray[np.float64], start: NDArray
         length = float(np.abs(b - a).max())
         if length <= joint_tolerance:
             continue
-        if _verifies(model, T, a + np.outer([0.25, 0.5, 0.75], b - a), allowed):
+        if chord_verifies(model, T, a, b - a, allowed):
             continue
         projections += 1
         if projections > WALK_POINTS:
@@ -111,7 +120,7 @@ def tied_along_valley(model: TargetModel, T: NDArray[np.float64], start: NDArray
         middle = 0.5 * (a + b)
         projected = project(model, T, middle)
         if (np.abs(projected - middle).max() > PROJECTION_REACH * length
-                or not _verifies(model, T, projected[None], allowed)):
+                or not verifies(model, T, projected[None], allowed)):
             return False
         pending += [(a, projected), (projected, b)]
     return True

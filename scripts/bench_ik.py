@@ -20,7 +20,9 @@ Reported per library, single thread (EAIK's and py-opw's batch calls are given o
 * single: median latency of one-pose calls (each call timed, median over the poses, median of
   the runs' medians; the libraries' calls interleaved pose by pose, so that their ratio is
   taken in one machine state); the peers return principal solutions only, like
-  ``ik(copies=False)``;
+  ``ik(copies=False)``. dhkin's ``copies=False`` call is also timed in a loop of its own (a
+  user's sweep of single calls: no other library's call evicting its caches between two of
+  its calls), reported below the table;
 * batch: poses per second of the library's batch call over all poses (a Python loop where it
   has none; that is said), median of the runs; runs go round-robin over the libraries;
 * sols/pose, the largest residual against Pinocchio (position m / rotation rad), exact: the share
@@ -353,6 +355,9 @@ class Row:
     singular_found: float  # share of q5 = 0 poses with >= 1 exact solution
     singular_exact_per_pose: float
     singular_inexact: float  # share of returned q5 = 0 solutions that are not exact
+    #: dhkin's first library only: the single call timed in a loop of its own (no other
+    #: library's call between two of its calls), median of the runs.
+    single_alone_us: float | None = None
 
 
 def timed_single(library: Library, n: int, runs: int) -> float:
@@ -471,10 +476,12 @@ def measure(robot: dhkin.Robot, libraries: list[Library], generic: PoseSet, sing
     singles: list[list[float]] = [[] for _ in libraries]
     rates: list[list[float]] = [[] for _ in libraries]
     results: list[Any] = [None] * len(libraries)
+    alone: list[float] = []
     for _ in range(runs):
         counts = [min(latency_poses, size) for size in sizes]
         for k, single in enumerate(timed_singles(libraries, counts)):
             singles[k].append(single)
+        alone.append(timed_single(libraries[0], counts[0], 1))
         for k, library in enumerate(libraries):
             rate, results[k] = timed_batch(library, sizes[k], 1)
             rates[k].append(rate)
@@ -487,7 +494,7 @@ def measure(robot: dhkin.Robot, libraries: list[Library], generic: PoseSet, sing
                                                       library.solutions(singular_results[k]))
         rows.append(Row(library, statistics.median(singles[k]), statistics.median(rates[k]),
                         quality(robot, generic, library.solutions(results[k])), found, per_pose,
-                        inexact))
+                        inexact, statistics.median(alone) if k == 0 else None))
     return rows
 
 
@@ -779,6 +786,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                          f"{BATCH_TARGET:,.0f}: {verdict}); single call {row.single_us:.2f} us "
                          f"(target {SINGLE_TARGET_US} us: "
                          f"{'met' if row.single_us <= SINGLE_TARGET_US else 'missed'}).")
+            assert row.single_alone_us is not None
+            lines.append(f"Single call in a loop of its own (no other library's call between "
+                         f"two of dhkin's): {row.single_alone_us:.2f} us (target "
+                         f"{SINGLE_TARGET_US} us: "
+                         f"{'met' if row.single_alone_us <= SINGLE_TARGET_US else 'missed'}).")
             if eaik is not None:
                 batch_ratio = row.batch_rate / eaik.batch_rate
                 single_ratio = row.single_us / eaik.single_us

@@ -66,6 +66,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin import _core
 from dhkin.description import read_urdf_file
 from dhkin.dh import DHTable
 from dhkin.errors import InputError, URDFError
@@ -134,6 +135,11 @@ class NumericalIK(DescentMethods):
         self._random_high = np.where(np.isfinite(self.upper), self.upper, math.pi)
         self.mid_range = np.where(self._limited, 0.5 * (self._random_low + self._random_high),
                                   0.0)
+        parts = self._chain.parts(reference.chain, reference.source)
+        self._core_chain = _core.NumericalChain(
+            parts["before"], parts["revolute"], parts["direction"], parts["offset"],
+            parts["tail"], self.lower, self.upper)
+        self._core_settings: dict[SolverSettings, _core.NumericalSettings] = {}
         self._ranks: dict[int, int] = {}
         self._banks: dict[int, _StartBank] = {}
         self._warm_tables: dict[int, _WarmStarts] = {}

@@ -1,4 +1,10 @@
-"""Numerical inverse kinematics on Pinocchio, for any URDF chain or DH table.
+"""Numerical inverse kinematics on a Pinocchio model, for any URDF chain or DH table.
+
+The descent from each start (the steps, limits and stopping rules below) runs in the compiled
+core (``cpp/dhkin/numerical/descent.hpp``) on the chain of the Pinocchio model
+(:meth:`~dhkin.ik.numerical.task._Chain.parts`: each joint's placement and axis); Python keeps the
+settings, the input checks, the starts, the choice among converged starts, the result types and
+the Pinocchio forward kinematics that re-measures every answer.
 
 The solver drives the actuated joints of one chain (a :class:`~dhkin.reference.Reference`: base ->
 tip) so that the tip reaches a target. It is what :meth:`dhkin.Robot.ik` falls back on when a

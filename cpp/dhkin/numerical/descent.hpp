@@ -13,9 +13,9 @@
 // * position: e = the first `rows` entries of R_base^T (p_tip + R_tip tcp - p_target), the TCP
 //   point's offset from the target in the base axes (m). Residual |e|; the rotation residual is
 //   NaN (orientation is not part of the task).
-// The method docstrings of dhkin/ik/numerical/solver.py state the steps, limits and stopping
-// rules; this file follows them line for line (the Python loop it replaced: descent.py before
-// helper i25ad).
+// The module docstring of dhkin/ik/numerical/solver.py states the steps, limits and stopping
+// rules for users; the comments below state them in full. This file follows, line for line, the
+// Python loop it replaced (src/dhkin/ik/numerical/descent.py before helper i25ad).
 #pragma once
 
 #include <Eigen/Dense>
@@ -344,10 +344,19 @@ class Descent {
   }
 
   // Phase 2 (redundant tasks): from a solution, move along the solutions toward the preferred
-  // configuration (NumericalIK._slide's docstring states the rules: null-space motion scaled to
-  // a cap of kSlideStep and to the first limit, a Newton correction of the task, the cap halved
-  // above kSlideNear and doubled below kSlideClose, a return to the last exact point above
-  // kSlideLost, the gain halved when the motion turns back). Returns the last exact point.
+  // configuration. Each iteration, at q with task error e: if the residual is at most
+  // kSlideNear, step by the null-space motion n = (I - J^+ J) gain W (q_preferred - q) (joints on
+  // a limit that it would push through held, null_motion), scaled down to a largest joint motion
+  // `cap` and to stop at the first limit it meets, and correct the task by a Newton step
+  // (bounded_step, so joints on a limit stay there); otherwise correct the task only. `cap`
+  // starts at kSlideStep, halves when a residual is above kSlideNear and doubles (up to
+  // kSlideStep) when it is at most kSlideClose; a residual above kSlideLost sends the slide back
+  // to its last exact point. When the null-space motion turns back (it overshot the optimum along
+  // a curved set of solutions) its gain halves, and it grows back by 1.25 per step that does not.
+  // Ends at an exact point whose null-space motion is at most nullspace_tolerance, after
+  // kSlidePatience + 1 iterations in a row in which a task error larger than the null-space
+  // motion failed to halve (a limit keeps the task out of reach), or after slide_iterations;
+  // returns the last exact point (the phase-1 solution at worst).
   Outcome slide(const Outcome& reached) {
     const Settings& s = settings_;
     const double tolerance = s.tolerance;

@@ -1,6 +1,7 @@
 """Numerical IK: the descent from one start, run by the compiled core
 (``cpp/dhkin/numerical/descent.hpp``: damped least squares within the joint limits, sliding along
-a limit, nullspace motion), and the checks of a reached point.
+a limit, nullspace motion) on the chain of the Pinocchio model (:meth:`_Chain.parts`), and the
+checks of a reached point (every answer re-measured by Pinocchio forward kinematics).
 """
 
 from __future__ import annotations
@@ -8,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import replace
+from functools import lru_cache
 
 import numpy as np
 import pinocchio as pin
@@ -34,7 +36,6 @@ class DescentMethods:
     upper: NDArray[np.float64]
     _chain: _Chain
     _core_chain: _core.NumericalChain
-    _core_settings: dict[SolverSettings, _core.NumericalSettings]
     _revolute: NDArray[np.bool_]
     _revolute_list: list[bool]
 
@@ -49,16 +50,9 @@ class DescentMethods:
         """Reach the task from ``start``; then, for a redundant task, slide along the solutions
         toward the preferred configuration (the compiled descent; the rules are those of
         :meth:`~dhkin.ik.numerical.solver.NumericalIK.solve` and ``descent.hpp``)."""
-        compiled = self._core_settings.get(settings)
-        if compiled is None:
-            compiled = _core.NumericalSettings(
-                settings.method, settings.tolerance, settings.max_iterations, settings.damping,
-                settings.nullspace_gain, settings.nullspace_tolerance, settings.slide_iterations,
-                settings.stall_window, settings.stall_ratio)
-            self._core_settings[settings] = compiled
         q = np.empty(self.dof)
         position, rotation, iterations, converged, motion = self._core_chain.descend(
-            task.core(), compiled, np.asarray(start, dtype=float), q)
+            task.core(), _compiled(settings), np.asarray(start, dtype=float), q)
         return Descent(q, start, position, rotation, iterations, converged, motion)
 
     def _measure(self, task: _Task, q: NDArray[np.float64]) -> tuple[float, float]:
@@ -103,3 +97,17 @@ class DescentMethods:
             if np.abs(wrapped).max() <= settings.distinct_tolerance:
                 return True
         return False
+
+
+#: Settings kept compiled: the solver's own and a few per-call variants (tolerance, method,
+#: max_iterations); bounded so that callers varying them cannot grow the cache without end.
+_COMPILED_SETTINGS = 32
+
+
+@lru_cache(maxsize=_COMPILED_SETTINGS)
+def _compiled(settings: SolverSettings) -> _core.NumericalSettings:
+    """The settings as the compiled descent takes them."""
+    return _core.NumericalSettings(
+        settings.method, settings.tolerance, settings.max_iterations, settings.damping,
+        settings.nullspace_gain, settings.nullspace_tolerance, settings.slide_iterations,
+        settings.stall_window, settings.stall_ratio)

@@ -1,11 +1,5 @@
 """Numerical inverse kinematics on a Pinocchio model, for any URDF chain or DH table.
 
-The descent from each start (the steps, limits and stopping rules below) runs in the compiled
-core (``cpp/dhkin/numerical/descent.hpp``) on the chain of the Pinocchio model
-(:meth:`~dhkin.ik.numerical.task._Chain.parts`: each joint's placement and axis); Python keeps the
-settings, the input checks, the starts, the choice among converged starts, the result types and
-the Pinocchio forward kinematics that re-measures every answer.
-
 The solver drives the actuated joints of one chain (a :class:`~dhkin.reference.Reference`: base ->
 tip) so that the tip reaches a target. It is what :meth:`dhkin.Robot.ik` falls back on when a
 table fits no closed-form family, and it works as well for a URDF file plus a tip frame (a 7-axis
@@ -72,7 +66,6 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from dhkin import _core
 from dhkin.description import read_urdf_file
 from dhkin.dh import DHTable
 from dhkin.errors import InputError, URDFError
@@ -141,11 +134,7 @@ class NumericalIK(DescentMethods):
         self._random_high = np.where(np.isfinite(self.upper), self.upper, math.pi)
         self.mid_range = np.where(self._limited, 0.5 * (self._random_low + self._random_high),
                                   0.0)
-        parts = self._chain.parts(reference.chain, reference.source)
-        self._core_chain = _core.NumericalChain(
-            parts["before"], parts["revolute"], parts["direction"], parts["offset"],
-            parts["tail"], self.lower, self.upper)
-        self._core_settings: dict[SolverSettings, _core.NumericalSettings] = {}
+        self._core_chain = self._chain.compiled(reference, self.lower, self.upper)
         self._ranks: dict[int, int] = {}
         self._banks: dict[int, _StartBank] = {}
         self._warm_tables: dict[int, _WarmStarts] = {}

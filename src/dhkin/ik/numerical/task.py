@@ -147,6 +147,13 @@ class _Chain:
         return {"before": before, "revolute": revolute, "direction": direction,
                 "offset": np.zeros(dof), "tail": tail}
 
+    def compiled(self, reference: Reference, lower: NDArray[np.float64],
+                 upper: NDArray[np.float64]) -> _core.NumericalChain:
+        """The compiled descent's chain (:meth:`parts`) with the joint limits (dof,)."""
+        parts = self.parts(reference.chain, reference.source)
+        return _core.NumericalChain(parts["before"], parts["revolute"], parts["direction"],
+                                    parts["offset"], parts["tail"], lower, upper)
+
     def tip_placement(self, q: NDArray[np.float64]) -> pin.SE3:
         """World -> tip at q (a copy)."""
         pin.forwardKinematics(self.model, self.data, self.configuration(q))

@@ -665,9 +665,12 @@ class ChainModel {
 
 // The general 6R solver's bindings (cpp/bindings_general6r.cpp).
 void bind_general6r(nb::module_& m);
+// The numerical IK's bindings (cpp/bindings_numerical.cpp).
+void bind_numerical(nb::module_& m);
 
 NB_MODULE(_core, m) {
   bind_general6r(m);
+  bind_numerical(m);
   m.doc() = "dhkin's compiled core: chains, the closed-form IK pipeline (see cpp/dhkin/*.hpp).";
   m.attr("BRANCHES") = kBranches;
   m.attr("WHY_SIZE") = dhkin::kWhySize;

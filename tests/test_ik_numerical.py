@@ -556,3 +556,45 @@ def test_bad_settings_and_limits_raise(solvers):
         solvers["ur5"].descend(np.eye(4), [0.0] * 7)
     with pytest.raises(dhkin.URDFError, match="no such URDF"):
         NumericalIK.from_urdf("/nonexistent/arm.urdf", "tool0")
+
+
+_ODD_AXES_URDF = """<robot name="odd_axes">
+  <link name="base_link"/><link name="l1"/><link name="l2"/><link name="l3"/><link name="l4"/>
+  <link name="l5"/><link name="l6"/><link name="tool0"/>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0.2"/><axis xyz="0 0 -1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="prismatic"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.1 0 0.2" rpy="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-0.2" upper="0.4" effort="1" velocity="1"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0 0.2 0" rpy="0 0.4 0"/><axis xyz="0.6 0 0.8"/>
+    <limit lower="-2.5" upper="2.5" effort="1" velocity="1"/></joint>
+  <joint name="j4" type="continuous"><parent link="l3"/><child link="l4"/>
+    <origin xyz="0.3 0 0" rpy="0 0 0"/><axis xyz="-1 0 0"/></joint>
+  <joint name="j5" type="prismatic"><parent link="l4"/><child link="l5"/>
+    <origin xyz="0 0 0.1" rpy="0 0 0.5"/><axis xyz="0 0.8 -0.6"/>
+    <limit lower="0" upper="0.3" effort="1" velocity="1"/></joint>
+  <joint name="j6" type="revolute"><parent link="l5"/><child link="l6"/>
+    <origin xyz="0 0.1 0" rpy="0.2 0.1 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <joint name="fixed" type="fixed"><parent link="l6"/><child link="tool0"/>
+    <origin xyz="0.05 0.02 0.1" rpy="0.1 0.2 0.3"/></joint>
+</robot>"""
+
+
+def test_prismatic_joints_and_odd_axes():
+    """The compiled descent runs on the chain built from the Pinocchio model (task._Chain.parts):
+    prismatic joints, axes along negative, tilted and x / y directions, a continuous joint, a
+    fixed tip frame. Poses of random in-limit joint vectors are solved to within tolerance by
+    Pinocchio FK (each answer is also re-measured by the solver), every one of them."""
+    ik = NumericalIK(Reference(_ODD_AXES_URDF, tip="tool0"))
+    rng = np.random.default_rng(43)
+    low = np.where(np.isfinite(ik.lower), ik.lower, -math.pi)
+    high = np.where(np.isfinite(ik.upper), ik.upper, math.pi)
+    for _ in range(30):
+        target = ik.reference.fk(rng.uniform(low, high))
+        solutions = ik.solve(target)
+        assert len(solutions) == 1
+        position, rotation = oracle_pose_errors(ik.reference, solutions.q[0], target)
+        assert position[0] <= DEFAULT_TOLERANCE and rotation[0] <= DEFAULT_TOLERANCE

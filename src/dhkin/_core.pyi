@@ -30,6 +30,31 @@ class Chain:
     def dof(self) -> int: ...
     def fk(self, q: NDArray[np.float64], out: NDArray[np.float64]) -> None: ...
 
+NUMERICAL_LAMBDA_FLOOR: float
+
+class NumericalTask:
+    def __init__(self, pose: bool, rows: int, target_inverse: NDArray[np.float64],
+                 world_point: NDArray[np.float64], base_rotation_t: NDArray[np.float64] | None,
+                 tcp: NDArray[np.float64] | None, preferred: NDArray[np.float64] | None,
+                 weights: NDArray[np.float64] | None) -> None: ...
+
+class NumericalSettings:
+    def __init__(self, method: str, tolerance: float, max_iterations: int, damping: float,
+                 nullspace_gain: float, nullspace_tolerance: float, slide_iterations: int,
+                 stall_window: int, stall_ratio: float) -> None: ...
+
+class NumericalChain:
+    def __init__(self, before: NDArray[np.float64], revolute: NDArray[np.bool_],
+                 direction: NDArray[np.float64], offset: NDArray[np.float64],
+                 tail: NDArray[np.float64], lower: NDArray[np.float64],
+                 upper: NDArray[np.float64]) -> None: ...
+    @property
+    def dof(self) -> int: ...
+    def project(self, q: NDArray[np.float64], out: NDArray[np.float64]) -> None: ...
+    def descend(self, task: NumericalTask, settings: NumericalSettings,
+                start: NDArray[np.float64], q_out: NDArray[np.float64],
+                ) -> tuple[float, float, int, bool, float]: ...
+
 class Answer:
     count: int
     found: int  # solutions stored; -1 when the pose or the seed was rejected

@@ -9,11 +9,11 @@ import re
 from dataclasses import dataclass
 from typing import Literal, TypeAlias
 
-import eigenpy
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from dhkin import _core
 from dhkin.errors import InputError
 from dhkin.ik.result import IKSolutions
 from dhkin.tolerances import DEFAULT_TOLERANCE
@@ -27,10 +27,6 @@ Method: TypeAlias = Literal["lm", "dls", "newton"]
 Preference: TypeAlias = Literal["auto", "seed", "mid_range"] | None
 
 
-#: (error vector, position residual m, rotation residual rad or NaN) at one q.
-_Error: TypeAlias = tuple[NDArray[np.float64], float, float]
-
-
 TWO_PI = 2.0 * math.pi
 
 
@@ -40,8 +36,10 @@ _PRISMATIC_NAME = re.compile(r"^JointModel(P[XYZ]|Prismatic)")
 
 
 #: Smallest damping added to J J^T: keeps the system solvable when J loses rank, and is far too
-#: small to slow the quadratic convergence of the last Newton steps (sigma_min^2 >> 1e-12).
-LAMBDA_FLOOR = 1e-12
+#: small to slow the quadratic convergence of the last Newton steps (sigma_min^2 >> 1e-12). The
+#: compiled descent's kLambdaFloor (cpp/dhkin/numerical/descent.hpp), where the descent's other
+#: constants (the LM damping rules, the slide's thresholds) live.
+LAMBDA_FLOOR: float = _core.NUMERICAL_LAMBDA_FLOOR
 
 
 #: Two solutions are the same when no joint differs by more than this (rad or m), revolute
@@ -55,50 +53,6 @@ NULLSPACE_TOLERANCE = 1e-6
 
 #: Limits wider than this (rad or m) are treated as no limit (URDF joints without a real bound).
 UNLIMITED = 1e6
-
-
-_MU_INITIAL = 1e-2
-
-
-_MU_MIN = 1e-9
-
-
-_MU_MAX = 1e8
-
-
-_MU_DOWN = 3.0
-
-
-_MU_UP = 10.0
-
-
-#: Relative cut-off of small singular values in the Moore-Penrose pseudo-inverse.
-_PINV_RCOND = 1e-10
-
-
-#: Null-space sliding: residuals (m or rad) below which a step may move in the null space
-#: (and above which the step cap halves), below which the cap doubles, and above which the
-#: slide goes back to its last exact point.
-_SLIDE_NEAR = 1e-2
-
-
-_SLIDE_CLOSE = 2e-3
-
-
-_SLIDE_LOST = 1e-1
-
-
-#: Sliding ends after this many iterations in a row in which a task error that the null-space
-#: motion does not explain fails to halve.
-_SLIDE_PATIENCE = 8
-
-
-#: A joint this close (rad or m) to a limit counts as on it for the null-space motion.
-_AT_LIMIT = 1e-6
-
-
-#: Largest null-space motion of one sliding step (rad or m per joint).
-_SLIDE_STEP = 0.3
 
 
 #: Int seeds whose random starts are kept per solver.
@@ -229,25 +183,6 @@ def _norm(vector: NDArray[np.float64]) -> float:
 
 def _same(a: float, b: float) -> bool:
     return a == b or (math.isnan(a) and math.isnan(b))
-
-
-def _task_step(J: NDArray[np.float64], e: NDArray[np.float64],
-               damping: float) -> NDArray[np.float64]:
-    """Step -J^# e with J^# the damped pseudo-inverse (Moore-Penrose when damping = 0)."""
-    rows, columns = J.shape
-    if damping == 0.0:
-        return -(np.linalg.pinv(J) @ e)
-    if rows <= columns:
-        A = J @ J.T
-        A.flat[:: rows + 1] += damping
-        return -(J.T @ eigenpy.LLT(A).solve(e).reshape(rows))
-    A = J.T @ J
-    A.flat[:: columns + 1] += damping
-    return -eigenpy.LLT(A).solve(J.T @ e).reshape(columns)
-
-
-def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def _is_revolute(joint: pin.JointModel) -> bool:

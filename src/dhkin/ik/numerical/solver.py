@@ -1,4 +1,4 @@
-"""Numerical inverse kinematics on Pinocchio, for any URDF chain or DH table.
+"""Numerical inverse kinematics on a Pinocchio model, for any URDF chain or DH table.
 
 The solver drives the actuated joints of one chain (a :class:`~dhkin.reference.Reference`: base ->
 tip) so that the tip reaches a target. It is what :meth:`dhkin.Robot.ik` falls back on when a
@@ -134,6 +134,7 @@ class NumericalIK(DescentMethods):
         self._random_high = np.where(np.isfinite(self.upper), self.upper, math.pi)
         self.mid_range = np.where(self._limited, 0.5 * (self._random_low + self._random_high),
                                   0.0)
+        self._core_chain = self._chain.compiled(reference, self.lower, self.upper)
         self._ranks: dict[int, int] = {}
         self._banks: dict[int, _StartBank] = {}
         self._warm_tables: dict[int, _WarmStarts] = {}

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "array_io.hpp"
 #include "dhkin/batch.hpp"
 #include "dhkin/chain.hpp"
 #include "dhkin/expand.hpp"
@@ -36,10 +37,10 @@ using dhkin::Joints;
 using dhkin::kBranches;
 using dhkin::kDof;
 
-template <class T, class... Shape>
-using Input = nb::ndarray<const T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
-template <class T, class... Shape>
-using Output = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
+using dhkin::bindings::Input;
+using dhkin::bindings::Output;
+using dhkin::bindings::frame_from;
+using dhkin::bindings::make_chain;
 
 // ---- reading named values (a plan's fields come as a dict of arrays) -------------------------
 
@@ -73,15 +74,6 @@ dhkin::Mat3 mat3(const nb::dict& f, const char* name) {
 dhkin::Planar planar(const nb::dict& f, const char* name) {
   const auto v = values_of(f, name, 2);
   return {v[0], v[1]};
-}
-
-Frame frame_from(const double* rows) {  // the top 3 rows of a 4 x 4 (or a 3 x 4) row-major
-  Frame out;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out.R[r][c] = rows[4 * r + c];
-    out.p[r] = rows[4 * r + 3];
-  }
-  return out;
 }
 
 Frame frame(const nb::dict& f, const char* name) {
@@ -175,29 +167,6 @@ dhkin::OffsetGeometry offset_geometry(const nb::dict& f) {
   g.scale = scalar(f, "scale");
   g.spread = scalar(f, "spread");
   return g;
-}
-
-// A chain from its parts: before (n, 4, 4), revolute (n,), direction (n,), offset (n,), tail (4, 4).
-dhkin::Chain make_chain(Input<double, nb::shape<-1, 4, 4>> before, Input<bool, nb::ndim<1>> revolute,
-                        Input<double, nb::ndim<1>> direction, Input<double, nb::ndim<1>> offset,
-                        Input<double, nb::shape<4, 4>> tail) {
-  const std::size_t n = before.shape(0);
-  if (revolute.shape(0) != n || direction.shape(0) != n || offset.shape(0) != n) {
-    throw std::invalid_argument("chain: before, revolute, direction and offset differ in length");
-  }
-  if (n < 1 || n > static_cast<std::size_t>(dhkin::kMaxJoints)) {
-    throw std::invalid_argument("chain: expected 1 to 32 joints");
-  }
-  dhkin::Chain chain;
-  chain.joints.resize(n);
-  for (std::size_t j = 0; j < n; ++j) {
-    chain.joints[j].before = frame_from(before.data() + 16 * j);
-    chain.joints[j].revolute = revolute(j);
-    chain.joints[j].direction = direction(j);
-    chain.joints[j].offset = offset(j);
-  }
-  chain.tail = frame_from(tail.data());
-  return chain;
 }
 
 dhkin::Chain chain_of(const nb::dict& f, const char* name) {

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "array_io.hpp"
 #include "dhkin/numerical/descent.hpp"
 
 namespace nb = nanobind;
@@ -20,20 +21,10 @@ namespace {
 
 namespace numerical = dhkin::numerical;
 
-template <class T, class... Shape>
-using Input = nb::ndarray<const T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
-template <class T, class... Shape>
-using Output = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu, Shape...>;
-
-// The top 3 rows of a row-major 4 x 4 transform.
-dhkin::Frame frame_of(const double* rows) {
-  dhkin::Frame out;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out.R[r][c] = rows[4 * r + c];
-    out.p[r] = rows[4 * r + 3];
-  }
-  return out;
-}
+using dhkin::bindings::frame_from;
+using dhkin::bindings::Input;
+using dhkin::bindings::make_chain;
+using dhkin::bindings::Output;
 
 numerical::JointVector joint_vector(Input<double, nb::ndim<1>> values, int dof, const char* name) {
   if (values.shape(0) != static_cast<std::size_t>(dof)) {
@@ -65,7 +56,7 @@ NumericalTask make_task(bool pose, int rows, Input<double, nb::shape<4, 4>> targ
   NumericalTask out;
   numerical::Task& t = out.task;
   t.pose = pose, t.rows = rows;
-  t.target_inverse = frame_of(target_inverse.data());
+  t.target_inverse = frame_from(target_inverse.data());
   t.world_point = {world_point(0), world_point(1), world_point(2)};
   if (base_rotation_t) {
     t.to_base = true;
@@ -116,24 +107,10 @@ class NumericalChain {
                  Input<double, nb::ndim<1>> direction, Input<double, nb::ndim<1>> offset,
                  Input<double, nb::shape<4, 4>> tail, Input<double, nb::ndim<1>> lower,
                  Input<double, nb::ndim<1>> upper) {
+    joints_.chain = make_chain(before, revolute, direction, offset, tail);
     const std::size_t n = before.shape(0);
-    if (revolute.shape(0) != n || direction.shape(0) != n || offset.shape(0) != n) {
-      throw std::invalid_argument("chain: before, revolute, direction and offset differ in length");
-    }
-    if (n < 1 || n > static_cast<std::size_t>(dhkin::kMaxJoints)) {
-      throw std::invalid_argument("chain: expected 1 to 32 joints");
-    }
-    dhkin::Chain& chain = joints_.chain;
-    chain.joints.resize(n);
     joints_.revolute.resize(n);
-    for (std::size_t j = 0; j < n; ++j) {
-      chain.joints[j].before = frame_of(before.data() + 16 * j);
-      chain.joints[j].revolute = revolute(j);
-      chain.joints[j].direction = direction(j);
-      chain.joints[j].offset = offset(j);
-      joints_.revolute[j] = revolute(j);
-    }
-    chain.tail = frame_of(tail.data());
+    for (std::size_t j = 0; j < n; ++j) joints_.revolute[j] = revolute(j);
     joints_.lower = joint_vector(lower, dof(), "lower");
     joints_.upper = joint_vector(upper, dof(), "upper");
   }

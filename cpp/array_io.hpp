@@ -1,0 +1,62 @@
+// What the binding units (cpp/bindings*.cpp) share: numpy arrays in and out, a frame read from a
+// row-major 4 x 4, and a chain built from its parts. Binding code only: the kinematics in
+// cpp/dhkin/ never sees nanobind.
+#pragma once
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <cstddef>
+#include <stdexcept>
+
+#include "dhkin/chain.hpp"
+#include "dhkin/frame.hpp"
+
+namespace dhkin::bindings {
+
+// A C-contiguous numpy array of T on the CPU, read only (Input) or written (Output).
+template <class T, class... Shape>
+using Input = nanobind::ndarray<const T, nanobind::numpy, nanobind::c_contig,
+                                nanobind::device::cpu, Shape...>;
+template <class T, class... Shape>
+using Output = nanobind::ndarray<T, nanobind::numpy, nanobind::c_contig, nanobind::device::cpu,
+                                 Shape...>;
+
+// The top 3 rows of a row-major 4 x 4 (or 3 x 4) transform.
+inline Frame frame_from(const double* rows) {
+  Frame out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out.R[r][c] = rows[4 * r + c];
+    out.p[r] = rows[4 * r + 3];
+  }
+  return out;
+}
+
+// A chain (chain.hpp) from its parts, as dhkin.ik.plan.chain_parts and
+// dhkin.ik.numerical.task._Chain.parts give them: before (n, 4, 4) the constant frames P_j,
+// revolute (n,), direction (n,), offset (n,), tail (4, 4) P_tail; 1 to kMaxJoints joints.
+inline Chain make_chain(Input<double, nanobind::shape<-1, 4, 4>> before,
+                        Input<bool, nanobind::ndim<1>> revolute,
+                        Input<double, nanobind::ndim<1>> direction,
+                        Input<double, nanobind::ndim<1>> offset,
+                        Input<double, nanobind::shape<4, 4>> tail) {
+  const std::size_t n = before.shape(0);
+  if (revolute.shape(0) != n || direction.shape(0) != n || offset.shape(0) != n) {
+    throw std::invalid_argument("chain: before, revolute, direction and offset differ in length");
+  }
+  if (n < 1 || n > static_cast<std::size_t>(kMaxJoints)) {
+    throw std::invalid_argument("chain: expected 1 to 32 joints");
+  }
+  Chain chain;
+  chain.joints.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    chain.joints[j].before = frame_from(before.data() + 16 * j);
+    chain.joints[j].revolute = revolute(j);
+    chain.joints[j].direction = direction(j);
+    chain.joints[j].offset = offset(j);
+  }
+  chain.tail = frame_from(tail.data());
+  return chain;
+}
+
+}  // namespace dhkin::bindings

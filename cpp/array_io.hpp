@@ -1,6 +1,6 @@
-// What the binding units (cpp/bindings*.cpp) share: numpy arrays in and out, a frame read from a
-// row-major 4 x 4, and a chain built from its parts. Binding code only: the kinematics in
-// cpp/dhkin/ never sees nanobind.
+// What the binding units (cpp/bindings*.cpp) share: numpy arrays in and out and a chain built
+// from its parts (a frame from a row-major 4 x 4 is pose.hpp's raw_frame). Binding code only: the
+// kinematics in cpp/dhkin/ never sees nanobind.
 #pragma once
 
 #include <nanobind/nanobind.h>
@@ -11,6 +11,7 @@
 
 #include "dhkin/chain.hpp"
 #include "dhkin/frame.hpp"
+#include "dhkin/pose.hpp"
 
 namespace dhkin::bindings {
 
@@ -21,16 +22,6 @@ using Input = nanobind::ndarray<const T, nanobind::numpy, nanobind::c_contig,
 template <class T, class... Shape>
 using Output = nanobind::ndarray<T, nanobind::numpy, nanobind::c_contig, nanobind::device::cpu,
                                  Shape...>;
-
-// The top 3 rows of a row-major 4 x 4 (or 3 x 4) transform.
-inline Frame frame_from(const double* rows) {
-  Frame out;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out.R[r][c] = rows[4 * r + c];
-    out.p[r] = rows[4 * r + 3];
-  }
-  return out;
-}
 
 // A chain (chain.hpp) from its parts, as dhkin.ik.plan.chain_parts and
 // dhkin.ik.numerical.task._Chain.parts give them: before (n, 4, 4) the constant frames P_j,
@@ -50,12 +41,12 @@ inline Chain make_chain(Input<double, nanobind::shape<-1, 4, 4>> before,
   Chain chain;
   chain.joints.resize(n);
   for (std::size_t j = 0; j < n; ++j) {
-    chain.joints[j].before = frame_from(before.data() + 16 * j);
+    chain.joints[j].before = raw_frame(before.data() + 16 * j);
     chain.joints[j].revolute = revolute(j);
     chain.joints[j].direction = direction(j);
     chain.joints[j].offset = offset(j);
   }
-  chain.tail = frame_from(tail.data());
+  chain.tail = raw_frame(tail.data());
   return chain;
 }
 

@@ -39,7 +39,7 @@ using dhkin::kDof;
 
 using dhkin::bindings::Input;
 using dhkin::bindings::Output;
-using dhkin::bindings::frame_from;
+using dhkin::raw_frame;
 using dhkin::bindings::make_chain;
 
 // ---- reading named values (a plan's fields come as a dict of arrays) -------------------------
@@ -78,7 +78,7 @@ dhkin::Planar planar(const nb::dict& f, const char* name) {
 
 Frame frame(const nb::dict& f, const char* name) {
   const auto v = values_of(f, name, 12);
-  return frame_from(v.data());
+  return raw_frame(v.data());
 }
 
 // Every key of `fields` must be one of `names`.
@@ -219,7 +219,7 @@ dhkin::Plan make_plan(const nb::dict& f) {
 }
 
 dhkin::TargetFrames target_frames(const Input<double, nb::shape<2, 4, 4>>& frames) {
-  return dhkin::TargetFrames::from(frame_from(frames.data()), frame_from(frames.data() + 16));
+  return dhkin::TargetFrames::from(raw_frame(frames.data()), raw_frame(frames.data() + 16));
 }
 
 Joints joints_of(const double* values) {

@@ -28,7 +28,7 @@ using dhkin::Joints;
 using dhkin::kDof;
 namespace g6 = dhkin::general6r;
 
-using dhkin::bindings::frame_from;
+using dhkin::raw_frame;
 using dhkin::bindings::Input;
 using Pose = Input<double, nb::shape<4, 4>>;
 
@@ -63,8 +63,8 @@ g6::Elimination elimination_from(const nb::dict& f) {
   const auto before = field(f, "before", 16 * g6::kProducts);
   const auto after = field(f, "after", 16 * g6::kProducts);
   for (int s9 = 0; s9 < g6::kProducts; ++s9) {
-    el.before[s9] = frame_from(before.data() + 16 * s9);
-    el.after[s9] = frame_from(after.data() + 16 * s9);
+    el.before[s9] = raw_frame(before.data() + 16 * s9);
+    el.after[s9] = raw_frame(after.data() + 16 * s9);
   }
   const auto right_inverse = field(f, "right_inverse", 81), half2 = field(f, "half2", 81);
   for (int r = 0; r < 9; ++r) {
@@ -80,8 +80,8 @@ g6::Elimination elimination_from(const nb::dict& f) {
   const auto rows = field(f, "rows", 3 * kDof);
   for (int j = 0; j < kDof; ++j) el.rows[j] = {rows[3 * j], rows[3 * j + 1], rows[3 * j + 2]};
   el.phi = joints_of(field(f, "phi", kDof));
-  el.D0_inverse = frame_from(field(f, "D0_inverse", 16).data());
-  el.E_inverse = frame_from(field(f, "E_inverse", 16).data());
+  el.D0_inverse = raw_frame(field(f, "D0_inverse", 16).data());
+  el.E_inverse = raw_frame(field(f, "E_inverse", 16).data());
   el.shift = field(f, "shift", 1)[0];
   el.k = static_cast<int>(field(f, "k", 1)[0]);
   if (el.k < 0 || el.k > 2) throw std::invalid_argument("field k: expected 0, 1 or 2");
@@ -122,13 +122,13 @@ g6::Solver solver_from(const nb::dict& f, const nb::list& others) {
   const auto chain_offset = field(f, "chain_offset", kDof);
   s.dh_chain.joints.resize(kDof);
   for (int j = 0; j < kDof; ++j) {
-    s.dh_chain.joints[j].before = frame_from(chain_before.data() + 16 * j);
+    s.dh_chain.joints[j].before = raw_frame(chain_before.data() + 16 * j);
     s.dh_chain.joints[j].direction = chain_direction[j];
     s.dh_chain.joints[j].offset = chain_offset[j];
   }
-  s.dh_chain.tail = frame_from(field(f, "chain_tail", 16).data());
-  s.tool = frame_from(field(f, "tool", 16).data());
-  s.base_inverse = frame_from(field(f, "base_inverse", 16).data());
+  s.dh_chain.tail = raw_frame(field(f, "chain_tail", 16).data());
+  s.tool = raw_frame(field(f, "tool", 16).data());
+  s.base_inverse = raw_frame(field(f, "base_inverse", 16).data());
   const auto lower = field(f, "lower", kDof), upper = field(f, "upper", kDof);
   for (int j = 0; j < kDof; ++j) s.limits[j] = {lower[j], upper[j]};
   s.lever = field(f, "lever", 1)[0];
@@ -170,7 +170,7 @@ class General6R {
   // The tip at tool0, or at the TCP `tcp` (None: tool0).
   g6::Tip tip(const nb::object& tcp) const {
     if (tcp.is_none()) return solver_.tip();
-    const Frame frame = frame_from(nb::cast<Pose>(tcp).data());
+    const Frame frame = raw_frame(nb::cast<Pose>(tcp).data());
     return solver_.tip(&frame);
   }
 
@@ -180,7 +180,7 @@ class General6R {
     g6::EliminationInfo info;
     {
       nb::gil_scoped_release release;
-      info = g6::candidates(solver_.elimination, frame_from(T_dh.data()), starts);
+      info = g6::candidates(solver_.elimination, raw_frame(T_dh.data()), starts);
     }
     std::vector<double> q;
     std::vector<std::int64_t> origin;
@@ -200,7 +200,7 @@ class General6R {
     int failed = 0;
     {
       nb::gil_scoped_release release;
-      const Frame target = frame_from(T_dh.data());
+      const Frame target = raw_frame(T_dh.data());
       failed = g6::settled_roots(solver_, solver_.dh_tip(), target, target, tolerance, roots);
     }
     std::vector<double> q, errors, sigmas;
@@ -272,11 +272,11 @@ dhkin::Chain chain6(Input<double, nb::shape<kDof, 4, 4>> before,
   dhkin::Chain chain;
   chain.joints.resize(kDof);
   for (int j = 0; j < kDof; ++j) {
-    chain.joints[j].before = frame_from(before.data() + 16 * j);
+    chain.joints[j].before = raw_frame(before.data() + 16 * j);
     chain.joints[j].direction = direction(j);
     chain.joints[j].offset = offset(j);
   }
-  chain.tail = frame_from(tail.data());
+  chain.tail = raw_frame(tail.data());
   return chain;
 }
 
@@ -306,7 +306,7 @@ void bind_general6r(nb::module_& m) {
         std::vector<Joints> roots;
         {
           nb::gil_scoped_release release;
-          roots = g6::multistart(chain, frame_from(target.data()), start_rows, tolerance, patience,
+          roots = g6::multistart(chain, raw_frame(target.data()), start_rows, tolerance, patience,
                                  most);
         }
         std::vector<double> q;

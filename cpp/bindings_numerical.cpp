@@ -21,7 +21,7 @@ namespace {
 
 namespace numerical = dhkin::numerical;
 
-using dhkin::bindings::frame_from;
+using dhkin::raw_frame;
 using dhkin::bindings::Input;
 using dhkin::bindings::make_chain;
 using dhkin::bindings::Output;
@@ -56,7 +56,7 @@ NumericalTask make_task(bool pose, int rows, Input<double, nb::shape<4, 4>> targ
   NumericalTask out;
   numerical::Task& t = out.task;
   t.pose = pose, t.rows = rows;
-  t.target_inverse = frame_from(target_inverse.data());
+  t.target_inverse = raw_frame(target_inverse.data());
   t.world_point = {world_point(0), world_point(1), world_point(2)};
   if (base_rotation_t) {
     t.to_base = true;

@@ -23,9 +23,26 @@ template <class T, class... Shape>
 using Output = nanobind::ndarray<T, nanobind::numpy, nanobind::c_contig, nanobind::device::cpu,
                                  Shape...>;
 
-// A chain (chain.hpp) from its parts, as dhkin.ik.plan.chain_parts and
-// dhkin.ik.numerical.task._Chain.parts give them: before (n, 4, 4) the constant frames P_j,
-// revolute (n,), direction (n,), offset (n,), tail (4, 4) P_tail; 1 to kMaxJoints joints.
+// A chain (chain.hpp) of n joints from row-major numbers: before (n x 16) the constant frames
+// P_j, direction (n) and offset (n) of v_j = direction q_j + offset, tail (16) P_tail; revolute
+// (n) the joints' kinds, or null for n revolute joints. The caller has checked the lengths.
+inline Chain chain_of(std::size_t n, const double* before, const bool* revolute,
+                      const double* direction, const double* offset, const double* tail) {
+  Chain chain;
+  chain.joints.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    chain.joints[j].before = raw_frame(before + 16 * j);
+    chain.joints[j].revolute = revolute == nullptr || revolute[j];
+    chain.joints[j].direction = direction[j];
+    chain.joints[j].offset = offset[j];
+  }
+  chain.tail = raw_frame(tail);
+  return chain;
+}
+
+// A chain from its parts, as dhkin.ik.plan.chain_parts and dhkin.ik.numerical.task._Chain.parts
+// give them: before (n, 4, 4), revolute (n,), direction (n,), offset (n,), tail (4, 4); 1 to
+// kMaxJoints joints.
 inline Chain make_chain(Input<double, nanobind::shape<-1, 4, 4>> before,
                         Input<bool, nanobind::ndim<1>> revolute,
                         Input<double, nanobind::ndim<1>> direction,
@@ -38,16 +55,8 @@ inline Chain make_chain(Input<double, nanobind::shape<-1, 4, 4>> before,
   if (n < 1 || n > static_cast<std::size_t>(kMaxJoints)) {
     throw std::invalid_argument("chain: expected 1 to 32 joints");
   }
-  Chain chain;
-  chain.joints.resize(n);
-  for (std::size_t j = 0; j < n; ++j) {
-    chain.joints[j].before = raw_frame(before.data() + 16 * j);
-    chain.joints[j].revolute = revolute(j);
-    chain.joints[j].direction = direction(j);
-    chain.joints[j].offset = offset(j);
-  }
-  chain.tail = raw_frame(tail.data());
-  return chain;
+  return chain_of(n, before.data(), revolute.data(), direction.data(), offset.data(),
+                  tail.data());
 }
 
 }  // namespace dhkin::bindings

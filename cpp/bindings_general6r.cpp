@@ -29,6 +29,7 @@ using dhkin::kDof;
 namespace g6 = dhkin::general6r;
 
 using dhkin::raw_frame;
+using dhkin::bindings::chain_of;
 using dhkin::bindings::Input;
 using Pose = Input<double, nb::shape<4, 4>>;
 
@@ -120,13 +121,8 @@ g6::Solver solver_from(const nb::dict& f, const nb::list& others) {
   const auto chain_before = field(f, "chain_before", 16 * kDof);
   const auto chain_direction = field(f, "chain_direction", kDof);
   const auto chain_offset = field(f, "chain_offset", kDof);
-  s.dh_chain.joints.resize(kDof);
-  for (int j = 0; j < kDof; ++j) {
-    s.dh_chain.joints[j].before = raw_frame(chain_before.data() + 16 * j);
-    s.dh_chain.joints[j].direction = chain_direction[j];
-    s.dh_chain.joints[j].offset = chain_offset[j];
-  }
-  s.dh_chain.tail = raw_frame(field(f, "chain_tail", 16).data());
+  s.dh_chain = chain_of(kDof, chain_before.data(), nullptr, chain_direction.data(),
+                        chain_offset.data(), field(f, "chain_tail", 16).data());
   s.tool = raw_frame(field(f, "tool", 16).data());
   s.base_inverse = raw_frame(field(f, "base_inverse", 16).data());
   const auto lower = field(f, "lower", kDof), upper = field(f, "upper", kDof);
@@ -265,21 +261,6 @@ class General6R {
   g6::Solver solver_;
 };
 
-// The chain of tool0 of a six-revolute table from its parts (dhkin.ik.plan.chain_parts).
-dhkin::Chain chain6(Input<double, nb::shape<kDof, 4, 4>> before,
-                    Input<double, nb::shape<kDof>> direction, Input<double, nb::shape<kDof>> offset,
-                    Pose tail) {
-  dhkin::Chain chain;
-  chain.joints.resize(kDof);
-  for (int j = 0; j < kDof; ++j) {
-    chain.joints[j].before = raw_frame(before.data() + 16 * j);
-    chain.joints[j].direction = direction(j);
-    chain.joints[j].offset = offset(j);
-  }
-  chain.tail = raw_frame(tail.data());
-  return chain;
-}
-
 }  // namespace
 
 void bind_general6r(nb::module_& m) {
@@ -298,7 +279,8 @@ void bind_general6r(nb::module_& m) {
          Input<double, nb::shape<kDof>> offset, Pose tail, Pose target,
          Input<double, nb::shape<-1, kDof>> starts, double tolerance, std::size_t patience,
          std::size_t most) {
-        const dhkin::Chain chain = chain6(before, direction, offset, tail);
+        const dhkin::Chain chain = chain_of(kDof, before.data(), nullptr, direction.data(),
+                                             offset.data(), tail.data());
         std::vector<Joints> start_rows(starts.shape(0));
         for (std::size_t i = 0; i < start_rows.size(); ++i) {
           for (int j = 0; j < kDof; ++j) start_rows[i][j] = starts(i, j);

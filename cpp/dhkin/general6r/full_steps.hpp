@@ -73,12 +73,15 @@ DHKIN_INLINE V singular_bound_of(const V* J) {
 
 inline double singular_bound(const Jacobian& J) { return singular_bound_of(J.data()); }
 
-// What full_steps() reached.
-struct FullStepRoot {
-  bool converged = false;
-  PoseError error;           // check()'s error at the root
-  double sigma_bound = 0.0;  // singular_bound of the scaled Jacobian at the root
+// What full_steps() reached (per lane for V = Lanes).
+template <class V>
+struct FullStepsT {
+  MaskOf<V> converged = every_lane<V>(false);
+  PoseErrorT<V> error;  // check()'s error at the root
+  V sigma_bound{};      // singular_bound of the scaled Jacobian at the root
 };
+using FullStepRoot = FullStepsT<double>;
+using FullStepLanes = FullStepsT<Lanes>;
 
 // Whether an error is at the rounding (kRoundingUlps, per metre of `lever`) and within
 // newton::kRefineFraction of `goal`: where full_steps() stops.
@@ -90,58 +93,9 @@ DHKIN_INLINE MaskOf<V> at_rounding(const PoseErrorT<V>& e, double goal, double l
          e.rotation <= converged;
 }
 
-// Full Gauss-Newton steps from q towards `target`, each solved by LU of the 6 x 6 Jacobian, while
-// each is within newton::kMaxJointStep per joint and shrinks the squared error
-// newton::kPolishGain-fold (refine()'s polishing rule), at most kFullSteps, until the error is at
-// the rounding and within newton::kRefineFraction of `goal` (at_rounding: refine()'s
-// convergence). Where they get there, q (in place) is the root, with its error and singular bound
-// (linear rows of the Jacobian over `lever`). Where not (a start farther off, a singular root's
-// linear convergence, a nearly singular Jacobian's error that stops shrinking above the
-// rounding), q is left as it was: refine() takes it from the start, as it did before.
-inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, const Frame& target,
-                               Joints& q, double goal, double lever) {
-  const auto done = [&](const PoseError& e) { return at_rounding(e, goal, lever); };
-  FullStepRoot out;
-  Evaluation now, trial;
-  Joints current = q;
-  evaluate(chain, shape, current, target, now);
-  Jacobian J;
-  for (int step = 0; step < kFullSteps && !done(now.error); ++step) {
-    jacobian(chain, now.frames.data(), J.data());
-    SquareLU<double> lu;
-    lu_factor6(J.data(), lu);
-    double dq[kDof];
-    lu_solve6(lu, now.e, dq);
-    Joints next;
-    for (int j = 0; j < kDof; ++j) {
-      if (!(std::abs(dq[j]) <= newton::kMaxJointStep)) return out;  // also NaN
-      next[j] = current[j] + dq[j];
-    }
-    evaluate(chain, shape, next, target, trial);
-    if (!(trial.size * newton::kPolishGain <= now.size)) return out;
-    current = next;
-    std::swap(now, trial);
-  }
-  if (!done(now.error)) return out;
-  jacobian(chain, now.frames.data(), J.data());
-  J.topRows<3>() /= lever;
-  out.converged = true;
-  out.error = pose_error(now.frames[kDof], target);
-  out.sigma_bound = singular_bound(J);
-  q = current;
-  return out;
-}
-
-// What full_steps_lanes() reached, per lane (full_steps()' FullStepRoot).
-struct FullStepLanes {
-  Mask converged = uniform(false);
-  PoseErrorT<Lanes> error;
-  Lanes sigma_bound;
-};
-
-// now = trial in the lanes `taken`.
-DHKIN_INLINE void take_lanes(Mask taken, const EvaluationT<Lanes>& trial,
-                             EvaluationT<Lanes>& now) {
+// now = trial in the lanes `taken` (every value where V = double and `taken`).
+template <class V>
+DHKIN_INLINE void take_lanes(MaskOf<V> taken, const EvaluationT<V>& trial, EvaluationT<V>& now) {
   for (int f = 0; f <= kDof; ++f) {
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) {
@@ -156,40 +110,51 @@ DHKIN_INLINE void take_lanes(Mask taken, const EvaluationT<Lanes>& trial,
   now.size = select(taken, trial.size, now.size);
 }
 
-// full_steps() from up to kLanes starts at once, one per lane of q, in the lanes `active`: each
-// lane takes full_steps()' operations on its own values (the lane type's arithmetic is the
-// double's, square_lu.hpp's LU is the scalar path's), so a lane converges exactly where
-// full_steps() would from that start, with the same root, error and singular bound, bit for
-// bit. A lane stops at its own rounding, at a step beyond kMaxJointStep or one that does not
-// gain kPolishGain-fold, as full_steps() does; the others step on. Converged lanes of q (in
-// place) hold their roots; the others are left as they were.
-inline FullStepLanes full_steps_lanes(const Chain& chain, const ChainShape& shape,
-                                      const Frame& target, JointsT<Lanes>& q, Mask active,
-                                      double goal, double lever) {
-  FullStepLanes out;
-  EvaluationT<Lanes> now, trial;
-  JointsT<Lanes> current = q;
+// Full Gauss-Newton steps from q towards `target` (per lane of q in the lanes `active`, for V =
+// Lanes), each solved by LU of the 6 x 6 Jacobian, while each is within newton::kMaxJointStep per
+// joint and shrinks the squared error newton::kPolishGain-fold (refine()'s polishing rule), at
+// most kFullSteps, until the error is at
+// the rounding and within newton::kRefineFraction of `goal` (at_rounding: refine()'s
+// convergence). Where they get there, q (in place) is the root, with its error and singular bound
+// (linear rows of the Jacobian over `lever`). Where not (a start farther off, a singular root's
+// linear convergence, a nearly singular Jacobian's error that stops shrinking above the
+// rounding), q is left as it was: refine() takes it from the start, as it did before.
+//
+// One code for one start (V = double) and for up to kLanes starts at once (V = Lanes): each lane
+// takes the operations of one start on its own values (the lane type's arithmetic is the
+// double's, square_lu.hpp's LU the same for both), so a lane converges exactly where one start
+// would, with the same root, error and singular bound, bit for bit. A lane stops at its own
+// rounding, at a step beyond kMaxJointStep or one that does not gain kPolishGain-fold; the others
+// step on.
+template <class V>
+inline FullStepsT<V> full_steps_of(const Chain& chain, const ChainShape& shape,
+                                   const Frame& target, JointsT<V>& q, MaskOf<V> active,
+                                   double goal, double lever) {
+  FullStepsT<V> out;
+  EvaluationT<V> now, trial;
+  JointsT<V> current = q;
   evaluate(chain, shape, current, target, now);
-  Mask stopped = !active;  // failed (or not a start): never converges
-  Lanes J[6 * kDof];
+  MaskOf<V> stopped = !active;  // failed (or not a start): never converges
+  V J[6 * kDof];
   for (int step = 0; step < kFullSteps; ++step) {
-    const Mask running = !stopped && !at_rounding(now.error, goal, lever);
+    const MaskOf<V> running = !stopped && !at_rounding(now.error, goal, lever);
     if (!any(running)) break;
     jacobian(chain, now.frames.data(), J);
-    SquareLU<Lanes> lu;
+    SquareLU<V> lu;
     lu_factor6(J, lu);
-    Lanes dq[kDof];
+    V dq[kDof];
     lu_solve6(lu, now.e, dq);
-    Mask within = uniform(true);
+    MaskOf<V> within = every_lane<V>(true);
     for (int j = 0; j < kDof; ++j) within = within && abs(dq[j]) <= newton::kMaxJointStep;
     stopped = stopped || (running && !within);  // also NaN
-    const Mask stepping = running && within;
-    JointsT<Lanes> next;
+    const MaskOf<V> stepping = running && within;
+    if (!any(stepping)) break;  // every lane has stopped or is at its rounding
+    JointsT<V> next;
     for (int j = 0; j < kDof; ++j) next[j] = select(stepping, current[j] + dq[j], current[j]);
     evaluate(chain, shape, next, target, trial);
-    const Mask gains = trial.size * newton::kPolishGain <= now.size;
+    const MaskOf<V> gains = trial.size * newton::kPolishGain <= now.size;
     stopped = stopped || (stepping && !gains);
-    const Mask taken = stepping && gains;
+    const MaskOf<V> taken = stepping && gains;
     for (int j = 0; j < kDof; ++j) current[j] = select(taken, next[j], current[j]);
     take_lanes(taken, trial, now);
   }
@@ -201,6 +166,19 @@ inline FullStepLanes full_steps_lanes(const Chain& chain, const ChainShape& shap
   out.sigma_bound = singular_bound_of(J);
   for (int j = 0; j < kDof; ++j) q[j] = select(out.converged, current[j], q[j]);
   return out;
+}
+
+// One start (full_steps_of). Where the steps do not get there, q is left as it was.
+inline FullStepRoot full_steps(const Chain& chain, const ChainShape& shape, const Frame& target,
+                               Joints& q, double goal, double lever) {
+  return full_steps_of<double>(chain, shape, target, q, true, goal, lever);
+}
+
+// Up to kLanes starts, one per lane of q, in the lanes `active` (full_steps_of).
+inline FullStepLanes full_steps_lanes(const Chain& chain, const ChainShape& shape,
+                                      const Frame& target, JointsT<Lanes>& q, Mask active,
+                                      double goal, double lever) {
+  return full_steps_of<Lanes>(chain, shape, target, q, active, goal, lever);
 }
 
 // A verified root q (in place) whose error is above the rounding, finished by full_steps() where

@@ -416,9 +416,10 @@ class ClosedForm {
     if (!T.taken() || (seed && !seed->taken())) {
       throw nb::type_error("expected C-contiguous float64 arrays of the call's shapes");
     }
-    if (!frames) return answer_of(T.data(), seed ? seed->data() : nullptr, tolerance, nullptr, copies);
+    const double* seed_q = seed ? seed->data() : nullptr;
+    if (!frames) return answer_of(T.data(), seed_q, tolerance, nullptr, copies);
     const dhkin::TargetFrames targets = target_frames(*frames);
-    return answer_of(T.data(), seed ? seed->data() : nullptr, tolerance, &targets, copies);
+    return answer_of(T.data(), seed_q, tolerance, &targets, copies);
   }
 
   // Binds what solve_common makes its results of: the type IKSolutions, whose slots "_answer",
@@ -453,7 +454,8 @@ class ClosedForm {
     std::optional<DoublesView> seed;
     if (!seed_array.is_none()) seed.emplace(seed_array, std::initializer_list<Py_ssize_t>{kDof});
     if (!T.taken() || (seed && !seed->taken())) return nb::none();
-    Answer answer = answer_of(T.data(), seed ? seed->data() : nullptr, tol, nullptr, copies.is(Py_True));
+    Answer answer =
+        answer_of(T.data(), seed ? seed->data() : nullptr, tol, nullptr, copies.is(Py_True));
     const long found = answer.found();
     if (found < 0) return nb::none();
     nb::object held = nb::cast(std::move(answer));

@@ -339,17 +339,17 @@ struct CallPlan {
 };
 
 // The doubles of a C-contiguous float64 array of `shape` through the buffer protocol, held for
-// the view's life; any other object (another dtype, shape or layout, a list) is a TypeError, as
-// nanobind's ndarray caster gives for what it cannot take as it is: solve_one then takes its
-// checked path, which converts or says what is wrong. A numpy array's buffer costs less than its
-// DLPack capsule (nanobind's route: a capsule and two allocations per call, ~5 % of a single
-// call).
+// the view's life. Any other object (another dtype, shape or layout, a list) gives no view
+// (`taken()` false, no exception set): ClosedForm::solve then raises a TypeError, as nanobind's
+// ndarray caster gives for what it cannot take as it is, and the single call takes its checked
+// path, which converts or says what is wrong. A numpy array's buffer costs less than its DLPack
+// capsule (nanobind's route: a capsule and two allocations per call, ~5 % of a single call).
 class DoublesView {
  public:
   DoublesView(nb::handle array, std::initializer_list<Py_ssize_t> shape) {
     if (PyObject_GetBuffer(array.ptr(), &view_, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
       PyErr_Clear();
-      throw nb::type_error("expected a C-contiguous float64 array");
+      return;
     }
     bool fits = view_.itemsize == sizeof(double) && view_.format != nullptr &&
                 native_double(view_.format) && view_.ndim == static_cast<int>(shape.size());
@@ -357,13 +357,17 @@ class DoublesView {
     for (Py_ssize_t extent : shape) fits = fits && k < view_.ndim && view_.shape[k++] == extent;
     if (!fits) {
       PyBuffer_Release(&view_);
-      throw nb::type_error("expected a C-contiguous float64 array of the call's shape");
+      return;
     }
+    taken_ = true;
   }
   DoublesView(const DoublesView&) = delete;
   DoublesView& operator=(const DoublesView&) = delete;
-  ~DoublesView() { PyBuffer_Release(&view_); }
+  ~DoublesView() {
+    if (taken_) PyBuffer_Release(&view_);
+  }
 
+  bool taken() const { return taken_; }
   const double* data() const { return static_cast<const double*>(view_.buf); }
 
  private:
@@ -378,7 +382,22 @@ class DoublesView {
     return format[0] == 'd' && format[1] == '\0';
   }
   Py_buffer view_{};
+  bool taken_ = false;
 };
+
+// What a single call's result is made of on the Python side: the result type
+// (dhkin.ik.result.IKSolutions), the descriptors of the three slots IKSolutions.from_core sets,
+// and the values of two of them every result of one solver shares (ClosedForm::bind_results).
+struct ResultSlots {
+  nb::object type, answer_slot, configure_slot, family_slot, configure, family;
+};
+
+// descriptor.__set__(instance, value), as `instance.slot = value` does once it has found the slot
+void set_slot(const nb::object& descriptor, nb::handle instance, nb::handle value) {
+  if (Py_TYPE(descriptor.ptr())->tp_descr_set(descriptor.ptr(), instance.ptr(), value.ptr()) != 0) {
+    throw nb::python_error();
+  }
+}
 
 class ClosedForm {
  public:
@@ -388,38 +407,66 @@ class ClosedForm {
 
   // One pose (4 x 4, base_link -> tool0, or -> the TCP of `frames`): its Answer. Without a
   // seed the seed is zero; without frames, the table's own base and tool.
-  // T (4, 4) and the seed (kDof,) are C-contiguous float64 arrays (DoublesView).
+  // T (4, 4) and the seed (kDof,) are C-contiguous float64 arrays (DoublesView), else TypeError.
   Answer solve(nb::handle T_array, nb::handle seed_array, double tolerance,
                std::optional<Input<double, nb::shape<2, 4, 4>>> frames, bool copies) const {
     const DoublesView T(T_array, {4, 4});
     std::optional<DoublesView> seed;
     if (!seed_array.is_none()) seed.emplace(seed_array, std::initializer_list<Py_ssize_t>{kDof});
-    const dhkin::TargetFrames targets =
-        frames ? target_frames(*frames) : solver_.default_frames();
-    std::unique_ptr<dhkin::Plan> storage;  // the plan of a TCP of the call's own
-    const dhkin::Plan* plan = default_plan_;
-    if (frames) {
-      storage = std::make_unique<dhkin::Plan>();
-      plan = &solver_.plan_for(targets, *storage);
+    if (!T.taken() || (seed && !seed->taken())) {
+      throw nb::type_error("expected C-contiguous float64 arrays of the call's shapes");
     }
-    const Joints seed_q = seed ? joints_of(seed->data()) : Joints{};
-    Answer answer;
-    for (int j = 0; j < kDof; ++j) answer.revolute[j] = plan->revolute(j);
-    dhkin::Branches branches;
-    // solve_pose: the direct path, else the pipeline (which can take long: the GIL is released)
-    if (!dhkin::direct_branches(*plan, targets, T.data(), seed_q, tolerance, branches,
-                                answer.info)) {
-      nb::gil_scoped_release release;
-      dhkin::solve_branches(*plan, targets, T.data(), seed_q, tolerance, branches, answer.info);
+    const double* seed_q = seed ? seed->data() : nullptr;
+    if (!frames) return answer_of(T.data(), seed_q, tolerance, nullptr, copies);
+    const dhkin::TargetFrames targets = target_frames(*frames);
+    return answer_of(T.data(), seed_q, tolerance, &targets, copies);
+  }
+
+  // Binds what solve_common makes its results of: the type IKSolutions, whose slots "_answer",
+  // "_configure" and "_family" it sets to the call's Answer and to `configure` and `family`.
+  void bind_results(nb::object type, nb::object configure, nb::object family) {
+    if (!PyType_Check(type.ptr())) throw nb::type_error("bind_results: expected a type");
+    results_ = ResultSlots{type, nb::getattr(type, "_answer"), nb::getattr(type, "_configure"),
+                           nb::getattr(type, "_family"), std::move(configure), std::move(family)};
+    for (const nb::object* slot : {&results_->answer_slot, &results_->configure_slot,
+                                   &results_->family_slot}) {
+      if (Py_TYPE(slot->ptr())->tp_descr_set == nullptr) {
+        throw nb::type_error("bind_results: expected slots _answer, _configure and _family");
+      }
     }
-    if (answer.info.status == dhkin::kUsable) {
-      dhkin::expand(*plan, targets, T.data(), seed_q, tolerance, copies, branches,
-                    [&](const dhkin::Solution& s) {
-                      answer.add(s);
-                      return true;
-                    });
+  }
+
+  // dhkin.ik.solver.ClosedFormSolver.solve_one's common call made whole here: no TCP, `copies` a
+  // bool, `tolerance` a finite positive float, T and the seed (or None) arrays solve takes as
+  // they are. Its result when the pose has solutions: an IKSolutions (bind_results) holding the
+  // Answer, as IKSolutions.from_core makes it; the Answer when the usable pose has none (the
+  // caller says why); None for any other call (the caller's checked path converts, or raises the
+  // error that names the input).
+  nb::object solve_common(nb::handle T_array, nb::handle seed_array, nb::handle tolerance,
+                          nb::handle tcp, nb::handle copies) const {
+    if (!results_ || !tcp.is_none() || !(copies.is(Py_True) || copies.is(Py_False)) ||
+        !PyFloat_CheckExact(tolerance.ptr())) {
+      return nb::none();
     }
-    return answer;
+    const double tol = PyFloat_AS_DOUBLE(tolerance.ptr());
+    if (!(0.0 < tol && tol < INFINITY)) return nb::none();
+    const DoublesView T(T_array, {4, 4});
+    std::optional<DoublesView> seed;
+    if (!seed_array.is_none()) seed.emplace(seed_array, std::initializer_list<Py_ssize_t>{kDof});
+    if (!T.taken() || (seed && !seed->taken())) return nb::none();
+    Answer answer =
+        answer_of(T.data(), seed ? seed->data() : nullptr, tol, nullptr, copies.is(Py_True));
+    const long found = answer.found();
+    if (found < 0) return nb::none();
+    nb::object held = nb::cast(std::move(answer));
+    if (found == 0) return held;
+    PyTypeObject* type = reinterpret_cast<PyTypeObject*>(results_->type.ptr());
+    nb::object result = nb::steal(type->tp_alloc(type, 0));  // object.__new__(IKSolutions)
+    if (!result.is_valid()) throw nb::python_error();
+    set_slot(results_->answer_slot, result, held);
+    set_slot(results_->configure_slot, result, results_->configure);
+    set_slot(results_->family_slot, result, results_->family);
+    return result;
   }
 
   // Steps 1-3 of N poses into q (N, 8, 6), ok, flags (N, 8), errors (N, 8, 2), totals (N, 8)
@@ -578,6 +625,36 @@ class ClosedForm {
   }
 
  private:
+  // solve's work on checked inputs: `frames` null for the table's own base and tool, `seed` null
+  // for zero.
+  Answer answer_of(const double* T, const double* seed, double tolerance,
+                   const dhkin::TargetFrames* frames, bool copies) const {
+    const dhkin::TargetFrames targets = frames ? *frames : solver_.default_frames();
+    std::unique_ptr<dhkin::Plan> storage;  // the plan of a TCP of the call's own
+    const dhkin::Plan* plan = default_plan_;
+    if (frames) {
+      storage = std::make_unique<dhkin::Plan>();
+      plan = &solver_.plan_for(targets, *storage);
+    }
+    const Joints seed_q = seed ? joints_of(seed) : Joints{};
+    Answer answer;
+    for (int j = 0; j < kDof; ++j) answer.revolute[j] = plan->revolute(j);
+    dhkin::Branches branches;
+    // solve_pose: the direct path, else the pipeline (which can take long: the GIL is released)
+    if (!dhkin::direct_branches(*plan, targets, T, seed_q, tolerance, branches, answer.info)) {
+      nb::gil_scoped_release release;
+      dhkin::solve_branches(*plan, targets, T, seed_q, tolerance, branches, answer.info);
+    }
+    if (answer.info.status == dhkin::kUsable) {
+      dhkin::expand(*plan, targets, T, seed_q, tolerance, copies, branches,
+                    [&](const dhkin::Solution& s) {
+                      answer.add(s);
+                      return true;
+                    });
+    }
+    return answer;
+  }
+
   static void check_rows(std::size_t n, std::size_t seeds, std::initializer_list<std::size_t> rows) {
     if (seeds != 1 && seeds != n) throw std::invalid_argument("seeds: expected 1 or N rows");
     for (std::size_t r : rows) {
@@ -594,6 +671,7 @@ class ClosedForm {
   dhkin::ClosedFormSolver solver_;
   dhkin::Plan unused_;                // plan_for's storage for the default frames: never written
   const dhkin::Plan* default_plan_;   // the plan of the table's own base and tool
+  std::optional<ResultSlots> results_;  // bind_results: what solve_common's results are made of
 };
 
 // ---- chains ----------------------------------------------------------------------------------
@@ -725,7 +803,9 @@ NB_MODULE(_core, m) {
       .def_prop_ro("dof", &ChainModel::dof)
       .def("fk", &ChainModel::fk, "q"_a, "out"_a);
 
-  nb::class_<Answer>(m, "Answer")
+  // pooled: a dropped Answer's Python object is kept for the next one (no allocation, no entry in
+  // nanobind's instance map per single call)
+  nb::class_<Answer>(m, "Answer", nb::pooled())
       .def_prop_ro("count", &Answer::count)
       .def_prop_ro("found", &Answer::found)
       .def_prop_ro("status", [](const Answer& a) { return a.info.status; })
@@ -746,6 +826,9 @@ NB_MODULE(_core, m) {
       .def(nb::init<const nb::dict&, Input<double, nb::shape<2, 4, 4>>>(), "plan"_a, "frames"_a)
       .def("solve", &ClosedForm::solve, "T"_a, "seed"_a.none(), "tolerance"_a,
            "frames"_a.none(), "copies"_a)
+      .def("bind_results", &ClosedForm::bind_results, "type"_a, "configure"_a, "family"_a)
+      .def("solve_common", &ClosedForm::solve_common, "T"_a.none(), "seed"_a.none(),
+           "tolerance"_a.none(), "tcp"_a.none(), "copies"_a.none())
       .def("principal", &ClosedForm::principal, "targets"_a, "seeds"_a, "tolerance"_a,
            "frames"_a, "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "totals"_a, "why"_a,
            "info"_a, "direct"_a = true)

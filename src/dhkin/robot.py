@@ -187,8 +187,11 @@ class Robot:
         "numerical"): the solution from the seed's basin first, not necessarily every solution.
         """
         solver = self._closed_form_solver
-        if solver is not None:
-            return solver.solve_one(T, q_seed, tolerance, tcp, copies)
+        if solver is not None:  # ClosedFormSolver.solve_one, without its own call
+            solved = solver.solve_common(T, q_seed, tolerance, tcp, copies)
+            if type(solved) is IKSolutions:
+                return solved
+            return solver.solve_rest(solved, T, q_seed, tolerance, tcp, copies)
         general = self.general_solver
         if general is not None:
             return general.solve_one(T, q_seed, tolerance, tcp, copies)

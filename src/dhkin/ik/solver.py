@@ -15,7 +15,6 @@ the seed (nearest 0 without one); ``copies=True`` lists every in-limit copy.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator, Mapping
 from types import MappingProxyType
 from typing import Any
@@ -46,13 +45,33 @@ from dhkin.transforms import invert
 DEFAULT_CHUNK = 65536
 
 
-#: solve_one's common call, looked up once.
-_INFINITY = math.inf
 _from_core = IKSolutions.from_core
-_new_solutions = object.__new__
 
 #: solve_chunks' default chunks hold at most this much output (bytes).
 STREAM_BYTES = 64 * 2**20
+
+
+class _Configurations:
+    """The (shared) Configuration of a branch and its turns: ``configurations(branch, turns)``.
+
+    Holds no reference to its solver: the core keeps one (ClosedForm.bind_results), and a
+    reference back would be a cycle the garbage collector cannot see through the core."""
+
+    __slots__ = ("known", "labels")
+
+    def __init__(self, labels: tuple[Mapping[str, str], ...]) -> None:
+        self.labels = labels
+        self.known: dict[tuple[int, tuple[int, ...]], Configuration] = {}
+
+    def __call__(self, branch: int, turns: tuple[int, ...]) -> Configuration:
+        key = (branch, turns)
+        found = self.known.get(key)
+        if found is None:
+            if len(self.known) >= 65536:
+                self.known.clear()
+            found = Configuration(labels=self.labels[branch], turns=turns)
+            self.known[key] = found
+        return found
 
 
 class INFO:
@@ -77,10 +96,14 @@ class ClosedFormSolver:
         self._base_inverse = invert(table.base)
         self.frames = self.frames_for(None)
         self.core = _core.ClosedForm(self.plan, self.frames)
-        self._solve_core = self.core.solve  # bound once: solve_one's common call
-        self._configure = self._configuration
+        self._configure = _Configurations(self.branch_labels)
+        self.core.bind_results(IKSolutions, self._configure, self.family)
+        #: The common single call made whole in the core (bound once: Robot.ik calls it first):
+        #: solve_common(T, q_seed, tolerance, tcp, copies) gives solve_one's IKSolutions when the
+        #: pose has solutions, the core's Answer when it has none, else None (any other call:
+        #: :meth:`solve_rest` then takes it).
+        self.solve_common = self.core.solve_common
         self._zero_seed = np.zeros(self.dof)
-        self._configurations: dict[tuple[int, tuple[int, ...]], Configuration] = {}
         self._revolute = np.array([j.is_revolute for j in table.joints], dtype=float)
         spans = table.upper - table.lower
         revolute = np.array([j.is_revolute for j in table.joints])
@@ -138,24 +161,18 @@ class ClosedFormSolver:
                   tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
                   copies: bool = False) -> IKSolutions:
         """Every branch's solution of one pose (4, 4) (see the module docstring)."""
-        if (tcp is None and (copies is False or copies is True) and type(tolerance) is float
-                and 0.0 < tolerance < _INFINITY):
-            # the common call, straight to the core; anything it cannot take as it is (another
-            # shape, a list, NaN) goes through the checked path below, which says what is wrong
-            try:
-                answer = self._solve_core(T, q_seed, tolerance, None, copies)
-            except TypeError:
-                answer = None
-            if answer is not None:
-                found = answer.found  # solutions; -1: the pose or the seed was rejected
-                if found > 0:
-                    # IKSolutions.from_core's three stores, without its call (~2 % of a call)
-                    result = _new_solutions(IKSolutions)
-                    result._answer, result._configure, result._family = (
-                        answer, self._configure, self.family)
-                    return result
-                if found == 0:
-                    return self._solutions(answer, tolerance)
+        solved = self.solve_common(T, q_seed, tolerance, tcp, copies)
+        if type(solved) is IKSolutions:
+            return solved
+        return self.solve_rest(solved, T, q_seed, tolerance, tcp, copies)
+
+    def solve_rest(self, answer: Any, T: ArrayLike, q_seed: ArrayLike | None, tolerance: float,
+                   tcp: ArrayLike | None, copies: bool) -> IKSolutions:
+        """:meth:`solve_one` of a call :attr:`solve_common` gave ``answer`` for (not an
+        IKSolutions): the core's Answer of a usable pose without solutions, or None (a call it
+        does not take as it is: the checked path converts, or says what is wrong)."""
+        if answer is not None:
+            return self._solutions(answer, tolerance)
         return self._solve_checked(T, q_seed, tolerance, tcp, copies)
 
     def _solve_checked(self, T: ArrayLike, q_seed: ArrayLike | None, tolerance: float,
@@ -188,17 +205,6 @@ class ClosedFormSolver:
                                                    answer.best_position, answer.best_rotation,
                                                    answer.why(), tolerance))
         return _from_core(answer, self.family, self._configure)
-
-    def _configuration(self, branch: int, turns: tuple[int, ...]) -> Configuration:
-        """The (shared) Configuration of a branch and its turns."""
-        key = (branch, turns)
-        found = self._configurations.get(key)
-        if found is None:
-            if len(self._configurations) >= 65536:
-                self._configurations.clear()
-            found = Configuration(labels=self.branch_labels[branch], turns=turns)
-            self._configurations[key] = found
-        return found
 
     def _reason(self, candidates: int, verified: int, best_position: float,
                 best_rotation: float, why: NDArray[np.float64], tolerance: float) -> str:

@@ -4,9 +4,9 @@
 // has more columns than rows, so that B has k = min(rows, columns) <= 6 columns) until every pair
 // of them is orthogonal to the rounding; then B V = U S with S the columns' norms, and
 // B^+ = V S^-1 U^T = sum_c v_c (B v)_c^T / s_c^2. The singular values are those of J to its
-// rounding (eps |J|), as those of Eigen's two-sided JacobiSVD, which this replaced: written out
-// on plain arrays it takes GCC ~1 s to compile instead of ~24 s for JacobiSVD of a dynamic matrix
-// (docs/architecture.md, "Build time (helper i25ag)").
+// rounding (eps |J|), as those of Eigen's two-sided JacobiSVD, which this replaced: GCC spent
+// half of cpp/bindings_numerical.cpp's compile time instantiating JacobiSVD for a dynamic matrix
+// (26.5 s of CPU with it, 13.8 s with this; docs/architecture.md, "Build time (helper i25ag)").
 #pragma once
 
 #include <Eigen/Core>
@@ -18,11 +18,17 @@
 
 namespace dhkin::numerical {
 
-using TaskJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, kMaxJoints>;
-using PseudoInverse = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, 6>;
+// Rows of a task: 6 for a pose, 3 or 2 for a position.
+constexpr int kMaxTaskRows = 6;
+
+using TaskJacobian =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxTaskRows, kMaxJoints>;
+using PseudoInverse =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxTaskRows>;
 
 // Sweeps over the column pairs until none is rotated; a sweep's rotations shrink the
-// off-diagonal mass quadratically once it is small (a handful of sweeps on at most 6 columns).
+// off-diagonal mass quadratically once it is small (a handful of sweeps on at most kMaxTaskRows
+// columns).
 // The cap is a guard, never reached on finite input.
 constexpr int kMaxPseudoInverseSweeps = 60;
 
@@ -42,8 +48,8 @@ inline PseudoInverse pseudo_inverse(const TaskJacobian& J, double rcond) {
   const int exponent = largest > 0.0 && std::isfinite(largest) ? std::ilogb(largest) : 0;
   const double up_first = std::ldexp(1.0, -(exponent / 2));
   const double up_second = std::ldexp(1.0, -(exponent - exponent / 2));
-  double b[6][kMaxJoints];  // column c of B (scaled), entries 0..m-1
-  double v[6][6];           // column c of V, entries 0..k-1
+  double b[kMaxTaskRows][kMaxJoints];  // column c of B (scaled), entries 0..m-1
+  double v[kMaxTaskRows][kMaxTaskRows];  // column c of V, entries 0..k-1
   for (int c = 0; c < k; ++c) {
     for (int i = 0; i < m; ++i) b[c][i] = (transposed ? J(c, i) : J(i, c)) * up_first * up_second;
     for (int i = 0; i < k; ++i) v[c][i] = i == c ? 1.0 : 0.0;
@@ -84,7 +90,7 @@ inline PseudoInverse pseudo_inverse(const TaskJacobian& J, double rcond) {
     }
     if (!rotated) break;
   }
-  double norms[6], largest_norm = 0.0;
+  double norms[kMaxTaskRows], largest_norm = 0.0;
   for (int c = 0; c < k; ++c) {
     norms[c] = std::sqrt(dot(b[c], b[c]));
     largest_norm = std::max(largest_norm, norms[c]);

@@ -129,6 +129,33 @@ def test_seed_4_3_2_redundant_3r(solvers):
     assert np.linalg.norm(reference.fk(from_zero.q)[:2, 3] - [2, 2]) <= DEFAULT_TOLERANCE
 
 
+@pytest.mark.parametrize("name, offset", [
+    ("planar_2r", [0.05, -0.03, 0.0]),  # 3 rows, 2 joints: the z row is zero (rank 2 of 3)
+    ("planar_2r", [0.05, -0.03]),       # square 2 x 2
+    ("planar_3r", [0.05, -0.03]),       # 2 rows, 3 joints
+    ("planar_3r", [0.05, -0.03, 0.0]),  # 3 x 3 of rank 2
+])
+def test_newton_step_is_the_moore_penrose_step(solvers, name, offset):
+    """One Newton step is q0 - J^+ e, J^+ numpy's pseudo-inverse of the position Jacobian (by
+    Pinocchio's FK, central differences): the core's pseudo-inverse (one-sided Jacobi) for tall,
+    square, wide and rank-deficient task Jacobians."""
+    ik = solvers[name]
+    q0 = np.array([0.3, 0.9, -0.4][: ik.dof])
+    rows = len(offset)
+    target = ik.reference.fk(q0)[:rows, 3] + offset  # a step well within the joint limits
+
+    def error(q):
+        return ik.reference.fk(q)[:rows, 3] - np.asarray(target)
+
+    step = 1e-6
+    J = np.column_stack([(error(q0 + step * e) - error(q0 - step * e)) / (2 * step)
+                         for e in np.eye(ik.dof)])
+    expected = q0 - np.linalg.pinv(J) @ error(q0)
+    first = ik.descend(target, q0, method="newton", max_iterations=1)
+    # central differences of a smooth FK: J to ~1e-10, a step of ~1 rad to ~1e-9
+    np.testing.assert_allclose(first.q, expected, atol=1e-8)
+
+
 @pytest.mark.parametrize("name", ["planar_2r", "planar_3r"])
 def test_planar_arms_reach_random_points(solvers, name):
     """300 reachable points per arm, seed-free: all solved, exact by Pinocchio, in limits."""

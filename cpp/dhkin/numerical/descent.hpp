@@ -25,17 +25,17 @@
 #include <vector>
 
 #include "dhkin/chain.hpp"
+#include "dhkin/numerical/pseudo_inverse.hpp"
 #include "dhkin/numerical/se3_log.hpp"
 
 namespace dhkin::numerical {
 
 // Vectors and matrices of the descent, sized at run time within fixed bounds (no allocation):
-// joint vectors of at most kMaxJoints entries, task vectors of at most 6 rows.
+// joint vectors of at most kMaxJoints entries, task vectors of at most 6 rows (TaskJacobian and
+// PseudoInverse: pseudo_inverse.hpp).
 using JointVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxJoints, 1>;
 using JointFlags = Eigen::Matrix<bool, Eigen::Dynamic, 1, 0, kMaxJoints, 1>;
 using TaskVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
-using TaskJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, kMaxJoints>;
-using PseudoInverse = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, 6>;
 using JointSquare = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
 using TaskSquare = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 
@@ -197,16 +197,6 @@ class Evaluator {
   Matrix3 error_R_;            // pose: T_target^-1 T(q) at the last q
   Vector3 error_p_;
 };
-
-// Moore-Penrose pseudo-inverse by SVD, singular values at most rcond x the largest dropped.
-inline PseudoInverse pseudo_inverse(const TaskJacobian& J, double rcond) {
-  const Eigen::JacobiSVD<TaskJacobian> svd(J, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& s = svd.singularValues();
-  const double cutoff = rcond * (s.size() > 0 ? s.maxCoeff() : 0.0);
-  TaskVector inverse_s(s.size());
-  for (int k = 0; k < s.size(); ++k) inverse_s[k] = s[k] > cutoff ? 1.0 / s[k] : 0.0;
-  return svd.matrixV() * inverse_s.asDiagonal() * svd.matrixU().transpose();
-}
 
 // Step -J^# e with J^# the damped pseudo-inverse (Moore-Penrose when damping = 0): the damped
 // system J J^T + damping I (or J^T J + damping I when the task has more rows than joints) by

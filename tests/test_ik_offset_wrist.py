@@ -97,12 +97,16 @@ def oracle_geometry(robot: dhkin.Robot, q: np.ndarray) -> OracleGeometry:
     model, data = ref.model, ref.data
     tip = ref.frame_id("tool0")
     columns = [model.joints[j].idx_v for j in ref.chain]
-    poses = np.empty((len(q), 4, 4))
-    jacobians = np.empty((len(q), 6, model.nv))
-    for k, config in enumerate(ref.configurations(q)):
-        pin.computeJointJacobians(model, data, config)
-        poses[k] = pin.updateFramePlacement(model, data, tip).homogeneous
-        jacobians[k] = data.J
+    # one row at a time through Pinocchio (10^5 rows a test): its functions bound once, the
+    # rows collected in lists and stacked once
+    joint_jacobians, frame_placement = pin.computeJointJacobians, pin.updateFramePlacement
+    pose_rows: list[np.ndarray] = []
+    jacobian_rows: list[np.ndarray] = []
+    for config in ref.configurations(q):
+        jacobian_rows.append(joint_jacobians(model, data, config))
+        pose_rows.append(frame_placement(model, data, tip).homogeneous)
+    poses = np.array(pose_rows).reshape(len(q), 4, 4)
+    jacobians = np.array(jacobian_rows).reshape(len(q), 6, model.nv)
     # world-frame joint twists: angular part = axis, linear part = -axis x (a point of the axis)
     axes = np.swapaxes(jacobians[:, 3:, columns], 1, 2)
     points = np.cross(axes, np.swapaxes(jacobians[:, :3, columns], 1, 2))

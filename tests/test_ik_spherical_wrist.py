@@ -71,8 +71,13 @@ def revolute_mask(table: dhkin.DHTable) -> np.ndarray:
 
 
 def wrapped_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Joint differences wrapped to [-pi, pi)."""
-    return np.mod(a - b + np.pi, TWO_PI) - np.pi
+    """Joint differences wrapped to [-pi, pi): mod(a - b + pi, 2pi) - pi, computed in place in
+    one array (the pairwise checks broadcast millions of entries; the same values bit for bit)."""
+    difference = np.asarray(np.subtract(a, b))
+    difference += np.pi
+    np.mod(difference, TWO_PI, out=difference)
+    difference -= np.pi
+    return difference if difference.ndim else difference[()]
 
 
 def joint_gap(table: dhkin.DHTable, a: np.ndarray, b: np.ndarray) -> np.ndarray:

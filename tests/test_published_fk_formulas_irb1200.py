@@ -26,6 +26,7 @@ A_1..A_6 use theta_1..theta_6.)
 
 from __future__ import annotations
 
+import functools
 import math
 import zlib
 
@@ -53,6 +54,7 @@ def seed_text() -> str:
     return files[0].read_text(encoding="utf-8")
 
 
+@functools.cache  # read once per test process: 240 tests ask, each load parses the table
 def dimensions() -> tuple[float, float, float, float, float]:
     """D1, L2, L3, D4, D6 of the seed, read from the built-in table (the URDF's numbers)."""
     joints = dhkin.load(ROBOT).table.joints

@@ -15,6 +15,7 @@ xacro) is written to a file and
 
 from __future__ import annotations
 
+import functools
 import shutil
 import subprocess
 import sys
@@ -38,7 +39,10 @@ TABLES = [*PER_ROBOT_BUILTINS, "custom_arm_modified", "custom_arm_prismatic"]
 FIXED_FRAMES = ("base_link", "base", "flange", "tool0")
 
 
+@functools.cache
 def load(name: str) -> dhkin.Robot:
+    """The robot named ``name``, loaded once per test process: the five tests of each table
+    read its table and generated URDF (``Robot.urdf`` caches the expansion), never change it."""
     if name.startswith("custom_"):
         return dhkin.load(DATA / f"{name}.yaml")
     return dhkin.load(name)

@@ -40,6 +40,7 @@ from dhkin.table_yaml import (
     MAX_TABLE_BYTES,
     MAX_YAML_DEPTH,
     MAX_YAML_NODES,
+    PARSED_TEXTS_KEPT,
     load_yaml,
     read_table_text,
 )
@@ -123,6 +124,31 @@ def test_nesting_a_thousand_deep_is_a_depth_error_not_a_recursion_error(tmp_path
     message = table_error("name:" + "".join("\n" + "  " * k + "k:" for k in range(1, 1000)),
                           tmp_path)
     assert f"nested at most {MAX_YAML_DEPTH} deep" in message
+
+
+def test_a_text_read_again_gives_a_fresh_copy_of_its_data(tmp_path: Path) -> None:
+    """load_yaml keeps the data of texts it has read: a caller's change to the data it got does
+    not reach the next read, a file changed on disk is read anew, a faulty text fails every
+    time, and more texts than PARSED_TEXTS_KEPT are all read right."""
+    text = (REPO / "robots" / "ur5.yaml").read_text()
+    first = load_yaml(text, "ur5.yaml")
+    first["name"] = "changed"
+    first["joints"][0]["d"] = 123.0
+    second = load_yaml(text, "ur5.yaml")
+    assert second == load_yaml(text, "another source") == yaml.safe_load(text)
+    assert second["name"] != "changed" and second["joints"][0]["d"] != 123.0
+    path = tmp_path / "t.yaml"
+    path.write_text(text)
+    before = load_table(path)
+    path.write_text(text.replace(f"name: {second['name']}", "name: renamed"))
+    assert load_table(path).name == "renamed" != before.name
+    bad = text + "\nname: twice\n"
+    for _ in range(2):
+        with pytest.raises(DHError, match=r"bad\.yaml: name: given twice in one mapping"):
+            load_yaml(bad, "bad.yaml")
+    texts = [f"value: {k}\n" for k in range(PARSED_TEXTS_KEPT + 10)]
+    for _ in range(2):
+        assert [load_yaml(t)["value"] for t in texts] == list(range(PARSED_TEXTS_KEPT + 10))
 
 
 def test_yaml_1_2_numbers_and_text(tmp_path: Path) -> None:

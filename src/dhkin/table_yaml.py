@@ -22,6 +22,8 @@ path of the entry in the file (``joints[2].a``), or the line for a YAML syntax e
 
 from __future__ import annotations
 
+import copy
+import functools
 import reprlib
 from collections.abc import Iterator
 from pathlib import Path
@@ -119,9 +121,26 @@ def read_table_text(path: str | Path) -> str:
                       expected="UTF-8 text") from exc
 
 
+#: Texts whose data :func:`load_yaml` keeps (the most recently read): every built-in robot's
+#: table (73) with as many again of a session's own. Each entry is a text of at most
+#: :data:`MAX_TABLE_BYTES` and its data.
+PARSED_TEXTS_KEPT = 146
+
+
 def load_yaml(text: str, source: str = "<table>") -> Any:
     """The data of YAML ``text`` (one document, plain data only), within the limits of this
-    module; any fault gives a one-line DHError that names ``source`` and the field or line."""
+    module; any fault gives a one-line DHError that names ``source`` and the field or line.
+
+    The data of a text read before is a copy of what its first read gave (the same text gives
+    the same data: the parse is pure), without parsing it again: ruamel's pure-Python parser
+    costs ~12 ms a table, a load of a built-in robot nearly all of it. Faults are not kept:
+    a faulty text is parsed, and its error raised, each time."""
+    return copy.deepcopy(_parsed(text, source))
+
+
+@functools.lru_cache(maxsize=PARSED_TEXTS_KEPT)
+def _parsed(text: str, source: str) -> Any:
+    """:func:`load_yaml` of a text not kept: the checks and the parse."""
     yaml = YAML(typ="safe", pure=True)
     yaml.version = (1, 2)
     try:

@@ -19,6 +19,8 @@
 #include <cmath>
 #include <limits>
 
+#include "dhkin/jacobi_rotation.hpp"
+
 namespace dhkin {
 
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
@@ -33,18 +35,11 @@ struct RightSvd {
   Matrix6 AV;       // A V: column w is values(w) u_w
 };
 
-// Sweeps over the 15 column pairs until none is rotated; a sweep's rotations shrink the
-// off-diagonal mass quadratically once it is small (five to eight sweeps on a 6 x 6 Jacobian).
-// The cap is a guard, never reached on finite input.
-constexpr int kMaxJacobiSweeps = 60;
-
 namespace jacobi {
 
-// Rotations of the column pairs of `work` (and the same on V) until every pair is orthogonal: a
-// pair (p, q) counts as such when |a_p . a_q| <= eps sqrt(|a_p|^2 |a_q|^2), the rounding of the
-// dot product itself.
+// Rotations of the column pairs of `work` (and the same on V) until every pair is orthogonal to
+// the rounding (jacobi_rotation.hpp).
 inline void sweep(Padded& work, Padded& V) {
-  constexpr double eps = std::numeric_limits<double>::epsilon();
   for (int sweep = 0; sweep < kMaxJacobiSweeps; ++sweep) {
     bool rotated = false;
     for (int p = 0; p < 5; ++p) {
@@ -52,39 +47,24 @@ inline void sweep(Padded& work, Padded& V) {
         const double alpha = work.col(p).squaredNorm();
         const double beta = work.col(q).squaredNorm();
         const double gamma = work.col(p).dot(work.col(q));
-        if (!(std::abs(gamma) > eps * std::sqrt(alpha * beta))) continue;
-        // the rotation that zeroes the pair's inner product: t = tan(theta), the smaller root
-        // of t^2 + 2 zeta t - 1 = 0
-        const double zeta = (beta - alpha) / (2.0 * gamma);
-        const double t = std::copysign(1.0, zeta) / (std::abs(zeta) + std::sqrt(1.0 + zeta * zeta));
-        const double c = 1.0 / std::sqrt(1.0 + t * t);
-        const double s = c * t;
-        if (s == 0.0) continue;  // a tangent below the rounding (zeta^2 overflowed)
+        PlaneRotation r;
+        if (!orthogonalising_rotation(alpha, beta, gamma, r)) continue;
         rotated = true;
         const Column wp = work.col(p), wq = work.col(q);
-        work.col(p) = c * wp - s * wq;
-        work.col(q) = s * wp + c * wq;
+        work.col(p) = r.c * wp - r.s * wq;
+        work.col(q) = r.s * wp + r.c * wq;
         const Column vp = V.col(p), vq = V.col(q);
-        V.col(p) = c * vp - s * vq;
-        V.col(q) = s * vp + c * vq;
+        V.col(p) = r.c * vp - r.s * vq;
+        V.col(q) = r.s * vp + r.c * vq;
       }
     }
     if (!rotated) break;
   }
 }
 
-// The power of two (as two factors, each within range even for subnormal or huge entries) that
-// brings the largest entry of A into [1, 2): the squared column norms and inner products can
-// then neither overflow nor lose a column that matters to underflow (one of entries below 1e-154
-// of the largest is below its rounding).
-struct Scale {
-  double first = 1.0, second = 1.0;
-  explicit Scale(const Matrix6& A) {
-    const double largest = A.cwiseAbs().maxCoeff();
-    const int exponent = largest > 0.0 && std::isfinite(largest) ? std::ilogb(largest) : 0;
-    first = std::ldexp(1.0, -(exponent / 2));
-    second = std::ldexp(1.0, -(exponent - exponent / 2));
-  }
+// The power of two that brings the largest entry of A into [1, 2) (jacobi_rotation.hpp).
+struct Scale : PowerOfTwoScale {
+  explicit Scale(const Matrix6& A) : PowerOfTwoScale(A.cwiseAbs().maxCoeff()) {}
 };
 
 // The SVD from the converged columns: values largest first, each with its V and A V column.

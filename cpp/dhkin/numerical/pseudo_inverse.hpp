@@ -15,6 +15,7 @@
 #include <limits>
 
 #include "dhkin/chain.hpp"  // kMaxJoints
+#include "dhkin/jacobi_rotation.hpp"
 
 namespace dhkin::numerical {
 
@@ -26,12 +27,6 @@ using TaskJacobian =
 using PseudoInverse =
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxTaskRows>;
 
-// Sweeps over the column pairs until none is rotated; a sweep's rotations shrink the
-// off-diagonal mass quadratically once it is small (a handful of sweeps on at most kMaxTaskRows
-// columns).
-// The cap is a guard, never reached on finite input.
-constexpr int kMaxPseudoInverseSweeps = 60;
-
 // J^+ with the singular values at most rcond x the largest dropped (their directions get 0).
 inline PseudoInverse pseudo_inverse(const TaskJacobian& J, double rcond) {
   const int rows = static_cast<int>(J.rows()), columns = static_cast<int>(J.cols());
@@ -39,15 +34,13 @@ inline PseudoInverse pseudo_inverse(const TaskJacobian& J, double rcond) {
   const int k = transposed ? rows : columns, m = transposed ? columns : rows;
   PseudoInverse out = PseudoInverse::Zero(columns, rows);
   if (k == 0) return out;
-  // A power of two (exact) that brings J's largest entry into [1, 2): the squared norms and inner
-  // products below can then neither overflow nor lose a column that matters to underflow.
+  // J scaled by a power of two (exact) that brings its largest entry into [1, 2)
   double largest = 0.0;
   for (int c = 0; c < columns; ++c) {
     for (int r = 0; r < rows; ++r) largest = std::max(largest, std::abs(J(r, c)));
   }
-  const int exponent = largest > 0.0 && std::isfinite(largest) ? std::ilogb(largest) : 0;
-  const double up_first = std::ldexp(1.0, -(exponent / 2));
-  const double up_second = std::ldexp(1.0, -(exponent - exponent / 2));
+  const PowerOfTwoScale scale(largest);
+  const double up_first = scale.first, up_second = scale.second;
   double b[kMaxTaskRows][kMaxJoints];  // column c of B (scaled), entries 0..m-1
   double v[kMaxTaskRows][kMaxTaskRows];  // column c of V, entries 0..k-1
   for (int c = 0; c < k; ++c) {
@@ -59,32 +52,24 @@ inline PseudoInverse pseudo_inverse(const TaskJacobian& J, double rcond) {
     for (int i = 0; i < m; ++i) sum += x[i] * y[i];
     return sum;
   };
-  // A pair (p, q) counts as orthogonal when |b_p . b_q| <= eps sqrt(|b_p|^2 |b_q|^2), the
-  // rounding of the dot product itself.
-  constexpr double eps = std::numeric_limits<double>::epsilon();
-  for (int sweep = 0; sweep < kMaxPseudoInverseSweeps; ++sweep) {
+  for (int sweep = 0; sweep < kMaxJacobiSweeps; ++sweep) {
     bool rotated = false;
     for (int p = 0; p + 1 < k; ++p) {
       for (int q = p + 1; q < k; ++q) {
-        const double alpha = dot(b[p], b[p]), beta = dot(b[q], b[q]), gamma = dot(b[p], b[q]);
-        if (!(std::abs(gamma) > eps * std::sqrt(alpha * beta))) continue;
-        // the rotation that zeroes the pair's inner product: t = tan(theta), the smaller root
-        // of t^2 + 2 zeta t - 1 = 0
-        const double zeta = (beta - alpha) / (2.0 * gamma);
-        const double t = std::copysign(1.0, zeta) / (std::abs(zeta) + std::sqrt(1.0 + zeta * zeta));
-        const double cosine = 1.0 / std::sqrt(1.0 + t * t);
-        const double sine = cosine * t;
-        if (sine == 0.0) continue;  // a tangent below the rounding (zeta^2 overflowed)
+        PlaneRotation r;
+        if (!orthogonalising_rotation(dot(b[p], b[p]), dot(b[q], b[q]), dot(b[p], b[q]), r)) {
+          continue;
+        }
         rotated = true;
         for (int i = 0; i < m; ++i) {
           const double bp = b[p][i], bq = b[q][i];
-          b[p][i] = cosine * bp - sine * bq;
-          b[q][i] = sine * bp + cosine * bq;
+          b[p][i] = r.c * bp - r.s * bq;
+          b[q][i] = r.s * bp + r.c * bq;
         }
         for (int i = 0; i < k; ++i) {
           const double vp = v[p][i], vq = v[q][i];
-          v[p][i] = cosine * vp - sine * vq;
-          v[q][i] = sine * vp + cosine * vq;
+          v[p][i] = r.c * vp - r.s * vq;
+          v[q][i] = r.s * vp + r.c * vq;
         }
       }
     }

@@ -12,7 +12,7 @@ gets one seed-free call ``NumericalIK.solve(T)`` (random restarts, default setti
   (``time.thread_time``, which other processes on a busy machine do not inflate); the solver
   is warmed up by one call first;
 * for the UR5 and the IRB 1200, whether each numerical answer is one of the closed-form
-  solutions of ``dhkin.load(name).ik(T)`` (which lists every 2 pi-shifted copy within the
+  solutions of ``dhkin.load(name).ik(T, copies=True)`` (every 2 pi-shifted copy within the
   limits): the largest joint difference to the nearest closed-form solution must be < 1e-6.
 
 The table is printed and written into docs/numerical_ik.md between the benchmark markers, with
@@ -141,7 +141,7 @@ def measure(name: str, solver: NumericalIK, targets: np.ndarray,
             result.exact_and_in_limits += 1
         if closed_form is not None:
             began = time.perf_counter()
-            reference_solutions = closed_form.ik(target)
+            reference_solutions = closed_form.ik(target, copies=True)
             result.closed_form_seconds.append(time.perf_counter() - began)
             if len(reference_solutions):
                 gap = np.abs(reference_solutions.q - q).max(axis=1).min()

@@ -155,7 +155,7 @@ def dhkin_library(robot: dhkin.Robot, copies: bool, workers: int = 1) -> Library
 
     label = "dhkin" if not copies else "dhkin, every 2pi copy"
     note = ("one solution per branch (`copies=False`)" if not copies else
-            "all in-limit 2pi copies (the default)")
+            "all in-limit 2pi copies (`copies=True`)")
     if workers > 1:
         label += f", {workers} threads"
         note += f"; the batch shared among {workers} threads"

@@ -385,6 +385,19 @@ class DoublesView {
   bool taken_ = false;
 };
 
+// A single call's pose (4, 4) and seed (kDof,) or None, as DoublesViews; taken() where both are
+// C-contiguous float64 arrays of those shapes (the seed: or None).
+struct PoseAndSeed {
+  PoseAndSeed(nb::handle T_array, nb::handle seed_array) : T(T_array, {4, 4}) {
+    if (!seed_array.is_none()) seed.emplace(seed_array, std::initializer_list<Py_ssize_t>{kDof});
+  }
+  bool taken() const { return T.taken() && (!seed || seed->taken()); }
+  const double* seed_data() const { return seed ? seed->data() : nullptr; }  // null: zero
+
+  DoublesView T;
+  std::optional<DoublesView> seed;
+};
+
 // What a single call's result is made of on the Python side: the result type
 // (dhkin.ik.result.IKSolutions), the descriptors of the three slots IKSolutions.from_core sets,
 // and the values of two of them every result of one solver shares (ClosedForm::bind_results).
@@ -410,16 +423,13 @@ class ClosedForm {
   // T (4, 4) and the seed (kDof,) are C-contiguous float64 arrays (DoublesView), else TypeError.
   Answer solve(nb::handle T_array, nb::handle seed_array, double tolerance,
                std::optional<Input<double, nb::shape<2, 4, 4>>> frames, bool copies) const {
-    const DoublesView T(T_array, {4, 4});
-    std::optional<DoublesView> seed;
-    if (!seed_array.is_none()) seed.emplace(seed_array, std::initializer_list<Py_ssize_t>{kDof});
-    if (!T.taken() || (seed && !seed->taken())) {
+    const PoseAndSeed in(T_array, seed_array);
+    if (!in.taken()) {
       throw nb::type_error("expected C-contiguous float64 arrays of the call's shapes");
     }
-    const double* seed_q = seed ? seed->data() : nullptr;
-    if (!frames) return answer_of(T.data(), seed_q, tolerance, nullptr, copies);
+    if (!frames) return answer_of(in.T.data(), in.seed_data(), tolerance, nullptr, copies);
     const dhkin::TargetFrames targets = target_frames(*frames);
-    return answer_of(T.data(), seed_q, tolerance, &targets, copies);
+    return answer_of(in.T.data(), in.seed_data(), tolerance, &targets, copies);
   }
 
   // Binds what solve_common makes its results of: the type IKSolutions, whose slots "_answer",
@@ -450,12 +460,9 @@ class ClosedForm {
     }
     const double tol = PyFloat_AS_DOUBLE(tolerance.ptr());
     if (!(0.0 < tol && tol < INFINITY)) return nb::none();
-    const DoublesView T(T_array, {4, 4});
-    std::optional<DoublesView> seed;
-    if (!seed_array.is_none()) seed.emplace(seed_array, std::initializer_list<Py_ssize_t>{kDof});
-    if (!T.taken() || (seed && !seed->taken())) return nb::none();
-    Answer answer =
-        answer_of(T.data(), seed ? seed->data() : nullptr, tol, nullptr, copies.is(Py_True));
+    const PoseAndSeed in(T_array, seed_array);
+    if (!in.taken()) return nb::none();
+    Answer answer = answer_of(in.T.data(), in.seed_data(), tol, nullptr, copies.is(Py_True));
     const long found = answer.found();
     if (found < 0) return nb::none();
     nb::object held = nb::cast(std::move(answer));

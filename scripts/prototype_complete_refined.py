@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Completeness and time of the prototype dhkin.ik.complete_refined (issue 25, branch i25ai) on
+"""Completeness and time of the prototype CompleteRefined below (issue 25, branch i25ai) on
 check_refined.py's sets: robot.ik merged with the general 6R's non-singular roots on the poses
 each trigger picks ("left": the pose leaves the refined direct path; "kantorovich": that, or a
 returned root's sigma_min below sqrt(2 deviation lever); "always").
@@ -16,22 +16,125 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from check_refined import BINS, DEFAULT_ARMS, SETS, TOLERANCE, missing, samples
 
 import dhkin
-from dhkin.ik.complete_refined import CompleteRefined
 from dhkin.ik.general6r import General6RSolver
 from dhkin.transforms import pose_error
 from dhkin.validation.multistart import RootReference
 from dhkin.validation.references import target_model
 
 MODES = ("left", "kantorovich", "always")
+
+# Prototype (issue 25, branch i25ai; not wired into Robot.ik): a refined table's answer made
+# complete by the general 6R solver's roots on the same exact chain.
+#
+# A refined table answers one root per branch slot; near the ideal model's singular sets its exact
+# chain has more isolated roots than slots (scripts/check_refined.py: every missing root measured
+# sits in a slot that holds another returned root). Here a pose that leaves the refined direct path
+# (depending on the trigger) is also solved by :class:`~dhkin.ik.general6r.General6RSolver` on the
+# table itself (its roots are complete: docs/general6r.md), and each of its roots that no branch
+# answer holds (none within ``SAME`` rad, mod 2pi) and that it does not flag "singular" (a member of
+# a near-singular family: the branch answers already hold the seed's member there) is appended,
+# labelled with the family's branch of its q (the ideal model's closed form at the ideal model's
+# pose of that q gives q itself in that branch).
+#
+# Triggers (``mode``): "always"; "left" (the pose leaves the refined direct path); "kantorovich"
+# ("left", or a returned root's sigma_min of the exact chain's Jacobian (Pinocchio's, in this
+# prototype) below :meth:`CompleteRefined.kantorovich_sigma`: where Newton from the ideal model's
+# root is not certain to converge to a unique root nearby, the exact chain may hold roots the
+# ideal model's branches do not lead to).
+
+#: Two roots are one when every joint agrees within this (rad, mod 2pi): the validator's joint
+#: tolerance (scripts/check_general6r.py, check_refined.py).
+SAME = 1e-6
+
+
+def _wrapped(d: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.asarray(np.mod(d + np.pi, 2.0 * np.pi) - np.pi)
+
+
+class CompleteRefined:
+    """``solve(T, q_seed)`` -> (q (k, 6), branch labels (k,)): robot.ik's rows, then the general
+    6R's roots that no row holds (module docstring)."""
+
+    def __init__(self, robot: object, mode: str = "kantorovich",
+                 general: General6RSolver | None = None) -> None:
+        from dhkin.robot import Robot
+
+        assert isinstance(robot, Robot)
+        self.robot = robot
+        self.solver = robot.ik_solver
+        self.general = general or General6RSolver(robot.table)
+        self.ideal = Robot(self.solver.fit.ideal)
+        self.mode = mode
+        self.reference = robot.reference()
+        self._direct = np.zeros(1, dtype=bool)
+        self.sigma_bound = self.kantorovich_sigma()
+
+    def kantorovich_sigma(self) -> float:
+        """sqrt(2 r L): Kantorovich's theorem makes Newton from a point of pose error r, where the
+        Jacobian's smallest singular value is sigma and its Lipschitz constant L, converge to a
+        unique root within ~2 r / sigma once r L / sigma^2 <= 1/2. r: the model deviation
+        (the ideal model's pose error on the exact chain, metres, rotations times the lever:
+        plan["deviation"]); L: the lever (a revolute Jacobian's columns turn by at most the
+        lever per radian)."""
+        plan = self.solver.plan
+        return float(np.sqrt(2.0 * float(plan["deviation"]) * float(plan["lever"])))
+
+    def triggered(self, target: NDArray[np.float64], q_seed: ArrayLike | None,
+                  q: NDArray[np.float64]) -> bool:
+        """Whether the general 6R solver runs on this pose (the module docstring's modes)."""
+        if self.mode == "always":
+            return True
+        seed = np.zeros((1, 6)) if q_seed is None else np.asarray(q_seed, float)[None]
+        self.solver.core.refined_direct_answers(target[None], seed, 1e-9, self.solver.frames,
+                                               self._direct)
+        if not self._direct[0] or self.mode == "left" or not len(q):
+            return not self._direct[0]
+        jacobians = self.reference.jacobians(q)
+        return bool(np.linalg.svd(jacobians, compute_uv=False)[:, -1].min() < self.sigma_bound)
+
+    def branch_of(self, q: NDArray[np.float64]) -> Mapping[str, str]:
+        found = self.ideal.ik_solver.branches(self.ideal.fk(q))
+        d = np.abs(_wrapped(found.q[0] - q)).max(axis=1)
+        d[~found.valid[0]] = np.inf
+        return self.ideal.ik_solver.branch_labels[int(np.argmin(d))]
+
+    def solve(self, T: ArrayLike, q_seed: ArrayLike | None = None
+              ) -> tuple[NDArray[np.float64], list[Mapping[str, str]]]:
+        target = np.ascontiguousarray(T, dtype=np.float64)
+        answer = self.robot.ik(target, q_seed)
+        q = np.asarray(answer.q).reshape(-1, 6)
+        labels = [c.labels for c in answer.configurations]
+        if not self.triggered(target, q_seed, q):
+            return q, labels
+        return self.merged(q, labels, self.general.solve_one(target, q_seed))
+
+    def merged(self, q: NDArray[np.float64], labels: list[Mapping[str, str]], roots: object
+               ) -> tuple[NDArray[np.float64], list[Mapping[str, str]]]:
+        """robot.ik's rows and labels, then the general 6R answer's roots no row holds."""
+        from dhkin.ik.result import IKSolutions
+
+        assert isinstance(roots, IKSolutions)
+        extra = [k for k, flags in enumerate(roots.flags) if "singular" not in flags]
+        if not extra:
+            return q, labels
+        candidates = np.asarray(roots.q)[extra]
+        if len(q):
+            d = np.abs(_wrapped(candidates[:, None, :] - q[None, :, :])).max(axis=2)
+            candidates = candidates[d.min(axis=1) > SAME]
+        for root in candidates:
+            labels.append(self.branch_of(root))
+        return np.vstack([q, candidates]) if len(candidates) else q, labels
 
 
 def main() -> None:

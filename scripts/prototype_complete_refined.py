@@ -1,14 +1,17 @@
 #!/usr/bin/env python
 """Completeness and time of the prototype CompleteRefined below (issue 25, branch i25ai) on
 check_refined.py's sets: robot.ik merged with the general 6R's non-singular roots on the poses
-each trigger picks ("left": the pose leaves the refined direct path; "kantorovich": that, or a
-returned root's sigma_min below sqrt(2 deviation lever); "always").
+each trigger picks ("left": the pose leaves the refined direct path; "newton": that, or
+Kantorovich's condition fails at some ideal candidate with its own error; "moved": "left", or
+refinement moved a branch more than the family band's 0.02 rad from the ideal model's
+candidate; "always").
 
     python scripts/prototype_complete_refined.py --poses 100 --starts 2000
 
 Per pose robot.ik and the general 6R solver run once each (unseeded, CPU time of this thread);
 a mode's time is robot.ik's plus the general solver's on the poses it triggers (its trigger's
-own cost, one direct-path run and eight sigma_min in the core, is not counted).
+own cost, a direct-path run and the ideal candidates, free in a core implementation, is not
+counted).
 """
 
 from __future__ import annotations
@@ -27,12 +30,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from check_refined import BINS, DEFAULT_ARMS, SETS, TOLERANCE, missing, samples
 
 import dhkin
+from dhkin.ik.family import BAND
 from dhkin.ik.general6r import General6RSolver
 from dhkin.transforms import pose_error
 from dhkin.validation.multistart import RootReference
 from dhkin.validation.references import target_model
 
-MODES = ("left", "kantorovich", "always")
+MODES = ("left", "newton", "moved", "always")
 
 # Prototype (issue 25, branch i25ai; not wired into Robot.ik): a refined table's answer made
 # complete by the general 6R solver's roots on the same exact chain.
@@ -100,8 +104,42 @@ class CompleteRefined:
                                                self._direct)
         if not self._direct[0] or self.mode == "left" or not len(q):
             return not self._direct[0]
+        if self.mode == "newton":
+            return self.newton_uncertain(target)
+        if self.mode == "moved":
+            return self.moved_beyond_band(target)
         jacobians = self.reference.jacobians(q)
         return bool(np.linalg.svd(jacobians, compute_uv=False)[:, -1].min() < self.sigma_bound)
+
+    def newton_uncertain(self, target: NDArray[np.float64]) -> bool:
+        """Whether Kantorovich's condition fails at some ideal candidate: h = r L / sigma^2 > 1/2,
+        r its pose error on the exact chain (position + lever x rotation), sigma the smallest
+        singular value of the exact chain's Jacobian there, L the lever (as
+        :meth:`kantorovich_sigma`, with the candidate's own error instead of the model's
+        deviation). Where it holds at every candidate, Newton from each converges to a unique
+        root within 2 r / sigma of it."""
+        found = self.ideal.ik_solver.branches(target)
+        candidates = found.q[0][found.valid[0]]
+        if not len(candidates):
+            return False
+        lever = float(self.solver.plan["lever"])
+        position, rotation = pose_error(self.robot.fk(candidates),
+                                        np.broadcast_to(target, (len(candidates), 4, 4)))
+        r = position + lever * rotation
+        sigma = np.linalg.svd(self.reference.jacobians(candidates), compute_uv=False)[:, -1]
+        return bool(np.any(r * lever > 0.5 * sigma ** 2))
+
+    def moved_beyond_band(self, target: NDArray[np.float64]) -> bool:
+        """Whether refinement moved some branch more than the family band's angle (0.02 rad,
+        dhkin.ik.family.BAND) from the ideal model's candidate: within the band the exact chain
+        is the ideal model's neighbour (its singular sets lie within the band of the ideal
+        model's); a branch that moves farther sits where the two models' roots need not
+        correspond one to one."""
+        found = self.ideal.ik_solver.branches(target)
+        settled = self.solver.branches(target)
+        both = found.valid[0] & settled.valid[0]
+        moved = np.abs(_wrapped(found.q[0][both] - settled.q[0][both]))
+        return bool(moved.size and moved.max() > BAND.angle)
 
     def branch_of(self, q: NDArray[np.float64]) -> Mapping[str, str]:
         found = self.ideal.ik_solver.branches(self.ideal.fk(q))
@@ -145,9 +183,9 @@ def main() -> None:
     parser.add_argument("--starts", type=int, default=2000)
     parser.add_argument("--seed", type=int, default=25)
     args = parser.parse_args()
-    print("| arm | set | poses | roots per bin | missing per bin: left ; kantorovich ; always | "
-          "wrong | general calls: left / kantorovich | us median / mean: ik, left, "
-          "kantorovich, always |")
+    print("| arm | set | poses | roots per bin | missing per bin: " + " ; ".join(MODES)
+          + " | wrong | general calls: left / newton / moved | us median / mean: "
+          + ", ".join(("ik", *MODES)) + " |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
     for arm in args.arms:
         robot = dhkin.load(arm)
@@ -198,7 +236,8 @@ def main() -> None:
                                for k in ("ik", *MODES))
             print(f"| {arm} | {kind} | {len(Q)} | {' / '.join(map(str, roots_bins))} | "
                   + " ; ".join(" / ".join(map(str, miss[m])) for m in MODES)
-                  + f" | {wrong} | {calls['left']} / {calls['kantorovich']} | {timing} |",
+                  + f" | {wrong} | {calls['left']} / {calls['newton']} / {calls['moved']} | "
+                  f"{timing} |",
                   flush=True)
 
 

@@ -46,7 +46,7 @@ from dhkin.ik.general6r import General6RSolver
 from dhkin.robot import Robot
 from dhkin.transforms import pose_error
 from dhkin.validation.multistart import ISOLATED, RootReference
-from dhkin.validation.references import target_model
+from dhkin.validation.references import TargetModel, target_model
 
 TOLERANCE = 1e-9
 #: A reference root is returned when a row is within this of it (rad, mod 2pi): the
@@ -89,6 +89,15 @@ def missing(roots: NDArray[np.float64], Q: NDArray[np.float64]) -> NDArray[np.bo
     return np.asarray(d.min(axis=1) > JOINT_TOLERANCE)
 
 
+def wrong_rows(model: TargetModel, T: NDArray[np.float64], Q: NDArray[np.float64],
+               allowed: float) -> int:
+    """How many rows of Q miss the pose T by more than ``allowed`` on the oracle (m and rad)."""
+    if not len(Q):
+        return 0
+    position, rotation = pose_error(model.fk(Q), np.broadcast_to(T, (len(Q), 4, 4)))
+    return int(np.sum(np.maximum(position, rotation) > allowed))
+
+
 def label_key(labels: object) -> tuple[tuple[str, str], ...]:
     return tuple(sorted(dict(labels).items()))  # type: ignore[call-overload]
 
@@ -121,8 +130,6 @@ class Figures:
     poses_ik_missing: int = 0
     ik_wrong: int = 0
     general_wrong: int = 0
-    ik_rows: int = 0
-    general_rows: int = 0
     ik_times: list[float] = field(default_factory=list)
     general_times: list[float] = field(default_factory=list)
 
@@ -171,15 +178,8 @@ def measure(robot: Robot, Q: NDArray[np.float64], starts: int, verbose: bool,
         figures.ik_times.append(seconds)
         general_answer, seconds = timed(lambda T=T: general.solve_one(T))
         figures.general_times.append(seconds)
-        for result, attribute in ((answer, "ik"), (general_answer, "general")):
-            if len(result):
-                position, rotation = pose_error(model.fk(result.q),
-                                                np.broadcast_to(T, (len(result), 4, 4)))
-                wrong = int(np.sum(np.maximum(position, rotation) > allowed))
-                setattr(figures, f"{attribute}_wrong", getattr(figures, f"{attribute}_wrong")
-                        + wrong)
-                setattr(figures, f"{attribute}_rows", getattr(figures, f"{attribute}_rows")
-                        + len(result))
+        figures.ik_wrong += wrong_rows(model, T, answer.q, allowed)
+        figures.general_wrong += wrong_rows(model, T, general_answer.q, allowed)
         roots = reference.points(T, TOLERANCE).roots
         if not len(roots):
             continue

@@ -569,6 +569,28 @@ class ClosedForm {
     }
   }
 
+  // Whether the refined direct path (refined_direct.hpp) answers each of N poses of a refined
+  // table (the rest take the pipeline; false for every pose of an exact-family table): which
+  // poses scripts/check_refined.py counts as settled by it.
+  void refined_direct_answers(Input<double, nb::shape<-1, 4, 4>> targets,
+                              Input<double, nb::shape<-1, kDof>> seeds, double tolerance,
+                              Input<double, nb::shape<2, 4, 4>> frames,
+                              Output<bool, nb::ndim<1>> answered) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {answered.shape(0)});
+    const CallPlan call(solver_, frames);
+    const dhkin::TargetFrames& target = call.target;
+    const dhkin::Plan& plan = *call.plan;
+    nb::gil_scoped_release release;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Joints seed = seed_row(seeds, i);
+      dhkin::Branches branches;
+      dhkin::PoseInfo pose;
+      answered(i) = dhkin::direct_refined_branches(plan, target, targets.data() + 16 * i, seed,
+                                                   tolerance, branches, pose);
+    }
+  }
+
   // Step 4 of N poses from principal()'s outputs into out_q (N, M, 6), out_valid, out_branch,
   // out_flags (N, M) and out_errors (N, M, 2); M must hold every pose's solutions.
   void expand(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
@@ -843,6 +865,8 @@ NB_MODULE(_core, m) {
            "q"_a, "valid"_a, "branch"_a, "flags"_a, "errors"_a, "projection"_a, "dropped"_a)
       .def("direct_answers", &ClosedForm::direct_answers, "targets"_a, "seeds"_a,
            "tolerance"_a, "frames"_a, "answered"_a)
+      .def("refined_direct_answers", &ClosedForm::refined_direct_answers, "targets"_a,
+           "seeds"_a, "tolerance"_a, "frames"_a, "answered"_a)
       .def("expand", &ClosedForm::expand, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,
            "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "out_q"_a, "out_valid"_a,
            "out_branch"_a, "out_flags"_a, "out_errors"_a);

@@ -93,6 +93,9 @@ class ClosedForm:
     def direct_answers(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                        tolerance: float, frames: NDArray[np.float64],
                        answered: NDArray[np.bool_]) -> None: ...
+    def refined_direct_answers(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
+                               tolerance: float, frames: NDArray[np.float64],
+                               answered: NDArray[np.bool_]) -> None: ...
     def expand(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                tolerance: float, frames: NDArray[np.float64], copies: bool,
                q: NDArray[np.float64], ok: NDArray[np.bool_], flags: NDArray[np.uint8],

@@ -159,3 +159,25 @@ def test_refined_direct_path_answers_as_the_pipeline(name, load_robot):
         np.testing.assert_array_equal(dinfo, info)
         np.testing.assert_allclose(np.angle(np.exp(1j * (dq[ok] - q[ok]))), 0.0, atol=1e-9)
         assert (derrors[ok] <= np.maximum(errors[ok], 1e-12)).all()
+
+
+@pytest.mark.parametrize("name", REFINED_TABLES)
+def test_refined_direct_answers_says_which_poses_the_lanes_settle(name, load_robot):
+    """``ClosedForm.refined_direct_answers`` (scripts/check_refined.py's split of the poses): on
+    random poses of a refined table the refined direct path settles most poses; at q5 = 0 every
+    pose has a candidate within the wrist's seed band and goes to the pipeline; an exact-family
+    table never takes the refined path at all."""
+    robot = load_robot(name)
+    rng = np.random.default_rng(43)
+    q = robot.table.random_q(500, rng)
+    q[400:, 4] = 0.0
+    T = np.ascontiguousarray(robot.fk(q))
+    seeds = np.zeros((1, robot.dof))
+    settled = np.zeros(len(T), np.bool_)
+    robot.ik_solver.core.refined_direct_answers(T, seeds, 1e-9, robot.ik_solver.frames, settled)
+    assert settled[:400].mean() > 0.5
+    assert not settled[400:].any()
+    exact = load_robot("ur5")
+    none = np.ones(len(T), np.bool_)
+    exact.ik_solver.core.refined_direct_answers(T, seeds, 1e-9, exact.ik_solver.frames, none)
+    assert not none.any()

@@ -6,7 +6,8 @@
 // nearly singular (sigma ~ the distance from the curve's pose), and a matrix polynomial that is
 // nearly singular too: its eigenvalues there are noise, and the elimination returns some of
 // those roots, not all (at q3 = -179.97 deg, 2 of 8). Every one of them lies on the curve that
-// the pose's equations minus their weakest combination (five equations in six joints) define
+// the pose's equations minus their weakest combination (five equations in six joints, the
+// combination re-taken at each point reached: it turns along a wrist's broken curve) define
 // through a root: traced by predictor-corrector continuation from each root the elimination
 // gave, the weakest combination changes sign at each of the others.
 //
@@ -58,9 +59,10 @@ inline Vector6 scaled_error(const Chain& chain, const Frame& target, const Joint
   return out;
 }
 
-// One valley: the curve {q : strong^T e(q) = 0} (`strong`: the five strongest left singular
-// vectors of the Jacobian at its root, transposed), `weak` the sixth, along which e changes sign
-// at each root on the curve.
+// One valley's equations near a point: the curve {q : strong^T e(q) = 0} (`strong`: the five
+// strongest left singular vectors of the Jacobian at the point, transposed; trace_valley re-takes
+// them at each point it reaches), `weak` the sixth, along which e changes sign at each root on
+// the curve.
 struct Valley {
   Relaxed strong;
   Vector6 weak;

@@ -396,6 +396,29 @@ def test_deflation_kept_off_at_the_leading_condition() -> None:
     assert not missing_roots(model, T, roots, answer.q, DEFAULT_TOLERANCE, SAME)
 
 
+def test_arrangement_ranked_by_what_its_starts_cost() -> None:
+    """A near-spherical arm forced through the general solver (the Kinova Gen3 6-DoF's table,
+    as a user's arm just outside the spherical-wrist band would be): every arrangement returns
+    every sample root, but the reversed k = 1 one's raw starts happened to lie within 1e-6 rad of
+    one sample more, and it was chosen, though ~5 of its starts a pose verify nothing and each
+    runs Newton's whole budget. Ranked by verified roots, then by the chain evaluations its
+    starts cost, the arrangement chosen drops fewer starts than every other regular one, with
+    the same roots (general6r_arrangement.rank_arrangements)."""
+    from dhkin.ik.general6r_arrangement import Arrangement
+
+    robot = dhkin.load("kinova_gen3_6dof")
+    chosen = General6RSolver(robot.table)
+    rng = np.random.default_rng(7)
+    lower, upper = np.maximum(robot.table.lower, -math.pi), np.minimum(robot.table.upper, math.pi)
+    T = robot.reference().fk(rng.uniform(lower, upper, size=(40, 6)))
+    answer = chosen.solve_batch(T, workers=1)
+    for other in chosen.other_arrangements:
+        alone = General6RSolver(robot.table, Arrangement(other.reversed, other.k))
+        theirs = alone.solve_batch(T, workers=1)
+        assert int(np.sum(answer.valid)) == int(np.sum(theirs.valid))
+        assert np.sum(answer.dropped) < np.sum(theirs.dropped)
+
+
 def test_shared_eigenvalues_are_split_into_each_root() -> None:
     """The cause of the lost roots: at q = (0, 0, 0, -90, 90, 180) deg four of the CRX-10iA's
     eight roots share the eliminated joint's value; the null space of M there is split into

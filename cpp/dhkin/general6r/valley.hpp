@@ -6,7 +6,8 @@
 // nearly singular (sigma ~ the distance from the curve's pose), and a matrix polynomial that is
 // nearly singular too: its eigenvalues there are noise, and the elimination returns some of
 // those roots, not all (at q3 = -179.97 deg, 2 of 8). Every one of them lies on the curve that
-// the pose's equations minus their weakest combination (five equations in six joints) define
+// the pose's equations minus their weakest combination (five equations in six joints, the
+// combination re-taken at each point reached: it turns along a wrist's broken curve) define
 // through a root: traced by predictor-corrector continuation from each root the elimination
 // gave, the weakest combination changes sign at each of the others.
 //
@@ -58,9 +59,10 @@ inline Vector6 scaled_error(const Chain& chain, const Frame& target, const Joint
   return out;
 }
 
-// One valley: the curve {q : strong^T e(q) = 0} (`strong`: the five strongest left singular
-// vectors of the Jacobian at its root, transposed), `weak` the sixth, along which e changes sign
-// at each root on the curve.
+// One valley's equations near a point: the curve {q : strong^T e(q) = 0} (`strong`: the five
+// strongest left singular vectors of the Jacobian at the point, transposed; trace_valley re-takes
+// them at each point it reaches), `weak` the sixth, along which e changes sign at each root on
+// the curve.
 struct Valley {
   Relaxed strong;
   Vector6 weak;
@@ -134,12 +136,13 @@ inline void trace_valley(const Chain& chain, const Frame& target, const Joints& 
   Jacobian J;
   scaled_error(chain, target, root, lever, J);
   const Eigen::JacobiSVD<Jacobian> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Valley valley;
-  valley.strong = svd.matrixU().leftCols<5>().transpose();
-  valley.weak = svd.matrixU().col(kDof - 1);
+  Valley at_root;
+  at_root.strong = svd.matrixU().leftCols<5>().transpose();
+  at_root.weak = svd.matrixU().col(kDof - 1);
   const double goal = newton::kRefineFraction * tolerance;
   for (const double direction : {1.0, -1.0}) {
     Joints q = root;
+    Valley valley = at_root;
     Vector6 tangent = direction * svd.matrixV().col(kDof - 1);
     double weak_error = 0.0, step = kValleyStep, travelled = 0.0;
     bool closed = false;
@@ -161,7 +164,19 @@ inline void trace_valley(const Chain& chain, const Frame& target, const Joints& 
         add_crossing(chain, target, q, weak_error, next, next_weak, tolerance, lever, band,
                      roots, met);
       }
-      q = next, tangent = next_tangent, weak_error = next_weak;
+      q = next, tangent = next_tangent;
+      // the valley's equations re-taken at the new point: along a wrist's broken curve (an arm
+      // a hair from a family at q5 = 0) the weak direction turns (|w . w_root| 0.43 one rad
+      // along, the Kinova Gen3 6-DoF), and five equations fixed at the root no longer describe
+      // the floor (docs/general6r.md, "Near-family arms"); the weak direction keeps its
+      // orientation, so that its combination changes sign only through a root
+      const Vector6 here = scaled_error(chain, target, q, lever, J);
+      const Eigen::JacobiSVD<Jacobian> turned(J, Eigen::ComputeFullU);
+      Vector6 weak = turned.matrixU().col(kDof - 1);
+      if (weak.dot(valley.weak) < 0.0) weak = -weak;
+      valley.strong = turned.matrixU().leftCols<5>().transpose();
+      valley.weak = weak;
+      weak_error = weak.dot(here);
       visited.push_back(q);
       travelled += step;
       step = std::min(2.0 * step, kValleyStep);

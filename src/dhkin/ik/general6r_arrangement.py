@@ -20,6 +20,7 @@ from dhkin.errors import FamilyError
 from dhkin.ik.general6r_elimination import Elimination
 from dhkin.ik.general6r_model import Model, _inverse
 from dhkin.ik.inputs import TWO_PI
+from dhkin.tolerances import DEFAULT_TOLERANCE
 
 
 class EliminatingSolver(Protocol):
@@ -39,6 +40,11 @@ class EliminatingSolver(Protocol):
 
     def compiled_candidates(self, T_dh: NDArray[np.float64], core: Any = None
                             ) -> NDArray[np.float64]: ...
+
+    lever: float
+
+    @staticmethod
+    def verification_tolerance(tolerance: float, lever: float) -> float: ...
 
 #: A candidate angle is taken from an eigenvalue whose half-angle arc tangent's imaginary
 #: part is at most this (rad). Rounding turns a double real root (a singular pose) into a
@@ -82,19 +88,39 @@ def wrap(q: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.asarray(-((-q + math.pi) % TWO_PI - math.pi))
 
 
+#: Chain evaluations a start costs when its root is settled (cpp/dhkin/general6r/roots.hpp,
+#: settle): one that verifies reaches the rounding within full_steps.hpp's kFullSteps (4) full
+#: Newton steps from an eigenvalue's start; one that verifies nothing runs Newton's whole
+#: newton.hpp kMaxSteps (30) before it is given up. Measured per start on the Kinova Gen3 6-DoF
+#: (random poses, settle alone): ~3 us against ~39 us.
+VERIFIED_START_EVALUATIONS = 4
+FAILED_START_EVALUATIONS = 30
+
+
 def rank_arrangements(solver: EliminatingSolver, poses: int = 12) -> list[Arrangement]:
-    """The arrangements whose matrix polynomial is regular, best first: the one that recovers the
-    most sample solutions (joint vectors drawn with a fixed seed; FK gives their poses) on the
-    exact chain, ties broken by the fewest starts (eigenvalues shared by several roots give a
-    start per root and cost a split: on the CRX-10iA every eigenvalue of the reversed k = 1
-    arrangement is shared by two roots, none of the forward one's), then by the polynomial's
-    conditioning. The first solves every pose; the others, which eliminate other joints, solve
-    the poses where a root is singular as well (``settled_roots``,
-    cpp/dhkin/general6r/solver.hpp)."""
+    """The arrangements whose matrix polynomial is regular, best first: the one whose solver
+    returns the most sample solutions (joint vectors drawn with a fixed seed; FK gives their
+    poses) among its verified roots on the exact chain, ties broken by the fewest chain
+    evaluations its starts cost (VERIFIED_START_EVALUATIONS a start that verifies,
+    FAILED_START_EVALUATIONS one that does not), then by the polynomial's conditioning. The
+    first solves every pose; the others, which eliminate other joints, solve the poses where a
+    root is singular as well (``settled_roots``, cpp/dhkin/general6r/solver.hpp).
+
+    A sample counts as returned when it is among the roots the arrangement's own solver verifies
+    (its starts refined by Newton, as every pose is solved), not when a raw start lies within
+    1e-6 rad of it: on an arm a hair from a family (the Kinova Gen3 6-DoF's near-spherical
+    wrist) the starts are farther off in every arrangement and every arrangement returns every
+    sample, so the raw count (1 of 12 samples against 0) chose the reversed k = 1 arrangement,
+    whose 4.5 starts a pose that verify nothing each run Newton's whole budget: 2.7 times the
+    forward one's time for the same roots (docs/general6r.md, "Near-family arms"). Starts count
+    too: eigenvalues shared by several roots give a start per root and cost a split (on the
+    CRX-10iA every eigenvalue of the reversed k = 1 arrangement is shared by two roots, none of
+    the forward one's)."""
     rng = np.random.default_rng(16)
     samples = rng.uniform(-math.pi, math.pi, size=(poses, 6))
     targets = [_inverse(solver.table.base) @ solver.table.fk(q) @ _inverse(solver.table.tool)
                for q in samples]
+    verification = solver.verification_tolerance(DEFAULT_TOLERANCE, solver.lever)
     scored: list[tuple[tuple[float, float, float], int, Arrangement]] = []
     for reversed_ in (False, True):
         for k in (1, 2, 0):
@@ -103,14 +129,19 @@ def rank_arrangements(solver: EliminatingSolver, poses: int = 12) -> list[Arrang
             regular = regularity(solver, el, targets[0], arrangement)
             if regular < SINGULAR_PENCIL:
                 continue
-            recovered, starts = 0, 0
+            recovered, failed, starts = 0, 0, 0
             core = solver.core_for(arrangement, el)
             for q, T_dh in zip(samples, targets, strict=True):
-                cands = solver.compiled_candidates(T_dh, core)
-                starts += cands.shape[0]
-                if cands.shape[0] and np.min(np.max(np.abs(wrap(cands - q)), axis=1)) < 1e-6:
+                T_dh = np.ascontiguousarray(T_dh, dtype=np.float64)
+                starts += solver.compiled_candidates(T_dh, core).shape[0]
+                roots, _, not_verified, _ = core.roots(T_dh, verification)
+                roots = np.asarray(roots)
+                failed += int(not_verified)
+                if roots.shape[0] and np.min(np.max(np.abs(wrap(roots - q)), axis=1)) < 1e-6:
                     recovered += 1
-            scored.append(((recovered, -starts, regular), -len(scored), arrangement))
+            evaluations = ((starts - failed) * VERIFIED_START_EVALUATIONS
+                           + failed * FAILED_START_EVALUATIONS)
+            scored.append(((recovered, -evaluations, regular), -len(scored), arrangement))
     if not scored:
         raise FamilyError(f"{solver.table.name}: every elimination's matrix polynomial is "
                           "singular")

@@ -554,19 +554,9 @@ class ClosedForm {
   void direct_answers(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
                       double tolerance, Input<double, nb::shape<2, 4, 4>> frames,
                       Output<bool, nb::ndim<1>> answered) {
-    const std::size_t n = targets.shape(0);
-    check_rows(n, seeds.shape(0), {answered.shape(0)});
-    const CallPlan call(solver_, frames);
-    const dhkin::TargetFrames& target = call.target;
-    const dhkin::Plan& plan = *call.plan;
-    nb::gil_scoped_release release;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Joints seed = seed_row(seeds, i);
-      dhkin::Branches branches;
-      dhkin::PoseInfo pose;
-      answered(i) = dhkin::direct_branches(plan, target, targets.data() + 16 * i, seed, tolerance,
-                                           branches, pose);
-    }
+    answered_by(
+        [](auto&&... arguments) { return dhkin::direct_branches(arguments...); },
+        targets, seeds, tolerance, frames, answered);
   }
 
   // Whether the refined direct path (refined_direct.hpp) answers each of N poses of a refined
@@ -576,19 +566,9 @@ class ClosedForm {
                               Input<double, nb::shape<-1, kDof>> seeds, double tolerance,
                               Input<double, nb::shape<2, 4, 4>> frames,
                               Output<bool, nb::ndim<1>> answered) {
-    const std::size_t n = targets.shape(0);
-    check_rows(n, seeds.shape(0), {answered.shape(0)});
-    const CallPlan call(solver_, frames);
-    const dhkin::TargetFrames& target = call.target;
-    const dhkin::Plan& plan = *call.plan;
-    nb::gil_scoped_release release;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Joints seed = seed_row(seeds, i);
-      dhkin::Branches branches;
-      dhkin::PoseInfo pose;
-      answered(i) = dhkin::direct_refined_branches(plan, target, targets.data() + 16 * i, seed,
-                                                   tolerance, branches, pose);
-    }
+    answered_by(
+        [](auto&&... arguments) { return dhkin::direct_refined_branches(arguments...); },
+        targets, seeds, tolerance, frames, answered);
   }
 
   // Step 4 of N poses from principal()'s outputs into out_q (N, M, 6), out_valid, out_branch,
@@ -654,6 +634,26 @@ class ClosedForm {
   }
 
  private:
+  // answered(i): whether `path` (a direct path: plan, target frames, pose, seed, tolerance,
+  // branches, pose info -> settled) answers pose i of N on its own.
+  template <typename Path>
+  void answered_by(Path path, Input<double, nb::shape<-1, 4, 4>> targets,
+                   Input<double, nb::shape<-1, kDof>> seeds, double tolerance,
+                   Input<double, nb::shape<2, 4, 4>> frames, Output<bool, nb::ndim<1>> answered) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {answered.shape(0)});
+    const CallPlan call(solver_, frames);
+    const dhkin::TargetFrames& target = call.target;
+    const dhkin::Plan& plan = *call.plan;
+    nb::gil_scoped_release release;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Joints seed = seed_row(seeds, i);
+      dhkin::Branches branches;
+      dhkin::PoseInfo pose;
+      answered(i) = path(plan, target, targets.data() + 16 * i, seed, tolerance, branches, pose);
+    }
+  }
+
   // solve's work on checked inputs: `frames` null for the table's own base and tool, `seed` null
   // for zero.
   Answer answer_of(const double* T, const double* seed, double tolerance,

@@ -37,12 +37,14 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 
 import dhkin
 from dhkin.ik.general6r import General6RSolver
+from dhkin.ik.result import IKSolutions
 from dhkin.robot import Robot
 from dhkin.transforms import pose_error
 from dhkin.validation.multistart import ISOLATED, RootReference
@@ -87,6 +89,18 @@ def missing(roots: NDArray[np.float64], Q: NDArray[np.float64]) -> NDArray[np.bo
         return np.ones(len(roots), dtype=bool)
     d = np.abs(wrapped(roots[:, None, :] - Q[None, :, :])).max(axis=2)
     return np.asarray(d.min(axis=1) > JOINT_TOLERANCE)
+
+
+def binned_roots(reference: RootReference, model: TargetModel, T: NDArray[np.float64]
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """The reference roots (k, 6) of the pose T, sigma_min of the oracle's Jacobian at each
+    and its bin (index into BIN_NAMES)."""
+    roots = reference.points(T, TOLERANCE).roots
+    if not len(roots):
+        return roots, np.zeros(0), np.zeros(0, np.int64)
+    sigma = np.asarray(np.linalg.svd(model.reference.jacobians(roots), compute_uv=False)[:, -1],
+                       dtype=np.float64)
+    return roots, sigma, np.asarray(np.digitize(sigma, BINS) - 1, dtype=np.int64)
 
 
 def wrong_rows(model: TargetModel, T: NDArray[np.float64], Q: NDArray[np.float64],
@@ -153,7 +167,7 @@ HEADER = ("| arm | set | poses (direct path) | reference roots per sigma bin | m
           "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 
 
-def timed(call: Callable[[], dhkin.IKSolutions]) -> tuple[dhkin.IKSolutions, float]:
+def timed(call: Callable[[], IKSolutions]) -> tuple[IKSolutions, float]:
     start = time.thread_time()
     result = call()
     return result, time.thread_time() - start
@@ -174,17 +188,15 @@ def measure(robot: Robot, Q: NDArray[np.float64], starts: int, verbose: bool,
     figures = Figures(poses=len(Q), direct_poses=int(direct.sum()))
     allowed = TOLERANCE + model.deviation
     for index, T in enumerate(targets):
-        answer, seconds = timed(lambda T=T: robot.ik(T))
+        answer, seconds = timed(partial(robot.ik, T))
         figures.ik_times.append(seconds)
-        general_answer, seconds = timed(lambda T=T: general.solve_one(T))
+        general_answer, seconds = timed(partial(general.solve_one, T))
         figures.general_times.append(seconds)
         figures.ik_wrong += wrong_rows(model, T, answer.q, allowed)
         figures.general_wrong += wrong_rows(model, T, general_answer.q, allowed)
-        roots = reference.points(T, TOLERANCE).roots
+        roots, sigma, bins = binned_roots(reference, model, T)
         if not len(roots):
             continue
-        sigma = np.linalg.svd(model.reference.jacobians(roots), compute_uv=False)[:, -1]
-        bins = np.digitize(sigma, BINS) - 1
         for b in bins:
             figures.roots[b] += 1
         lacking = missing(roots, answer.q)

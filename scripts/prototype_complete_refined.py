@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from check_refined import BINS, DEFAULT_ARMS, SETS, TOLERANCE, missing, samples
+from check_refined import DEFAULT_ARMS, SETS, TOLERANCE, binned_roots, missing, samples
 
 import dhkin
 from dhkin.ik.family import BAND
@@ -221,11 +221,9 @@ def main() -> None:
                 if len(merged):
                     p, r = pose_error(model.fk(merged), np.broadcast_to(T, (len(merged), 4, 4)))
                     wrong += int(np.sum(np.maximum(p, r) > TOLERANCE + model.deviation))
-                points = reference.points(T, TOLERANCE).roots
+                points, _, bins = binned_roots(reference, model, T)
                 if not len(points):
                     continue
-                sigma = np.linalg.svd(model.reference.jacobians(points), compute_uv=False)[:, -1]
-                bins = np.digitize(sigma, BINS) - 1
                 for b in bins:
                     roots_bins[b] += 1
                 for mode, rows in answers.items():

@@ -96,40 +96,38 @@ inline bool still_entering(const Chain& chain, const Limits& limits, const Joint
 }
 
 // The goal of a pass of walk_into_limits that crosses into the box in one pass where the curve
-// is straight (Newton along the curve): q moved along the Jacobian's weak directions (singular
-// values within `band`, the curve's tangent) by the least-squares step that brings each joint
-// outside the box to half the margin outside its limit (the pass then ends within the margin
-// where the curve's bend over the step moves the joint by less than half the margin either way;
-// a pass that ends inside the box is not kept, see walk_into_limits). The plain goal, the box's
-// point nearest q, moves a member along a curve that meets the box at a small angle theta only
-// sin^2 theta of the way per pass (von Neumann's rate): tm5_900 at q = (0, 90, 155, 90, 180, 0)
-// deg (q3 on its limit, q5 = 180: a curve with q6 free), theta = 0.026 rad, 7400 passes of a
-// 0.07 rad excess per root, 10 s a pose. False where no weak direction moves the joints outside
-// (no such step). The step is cut to kMaxJointStep per joint (Newton's trusted step): a curve
-// that dips into the box and out again within one pass would be crossed twice.
+// is straight (Newton along the curve): q moved along the Jacobian's one weak direction (singular
+// value within `band`: the curve's tangent t) by the step that brings the one joint j beyond the
+// box to half the margin outside its limit, (excess / t_j) t (the pass then ends within the
+// margin where the curve's bend over the step moves joint j by less than half the margin either
+// way; a pass that ends inside the box, or through it and out again, is not kept: see
+// walk_into_limits). The plain goal, the box's point nearest q, moves a member along a curve that
+// meets the box at a small angle only t_j^2 of the way per pass (von Neumann's rate): tm5_900 at
+// q = (0, 90, 155, 90, 180, 0) deg (q3 on its limit, q5 = 180 deg), t_3 = 0.026, 7400 passes per
+// root from 0.07 rad beyond, 10 s a pose. False where more than one direction is weak (a crossing
+// of curves) or more than one joint lies beyond the box: the plain passes there, as before (a
+// least-squares step on a folded M-430iA/2P, q1 and q5 beyond their limits at a crossing of two
+// curves, carried a member onto the q1 limit, a second row of a set answered once). The step is
+// cut to kMaxJointStep per joint (Newton's trusted step): a curve that dips into the box and out
+// again within one pass would be crossed twice.
 inline bool crossing_goal(const Chain& chain, const Limits& limits, const Joints& q,
                           double margin, double lever, double band, Joints& goal) {
   const RightSvd svd = right_svd(scaled_jacobian(chain, q, lever));
-  int weak = 0;
-  while (weak < kDof && svd.values(kDof - 1 - weak) <= band) ++weak;
-  if (weak == 0) return false;
-  const Eigen::MatrixXd W = svd.V.rightCols(weak);
+  if (!(svd.values(kDof - 1) <= band) || svd.values(kDof - 2) <= band) return false;
   double outside = 0.0;
   const Joints nearest = box_point(limits, q, outside);
-  std::vector<int> rows;
-  Eigen::VectorXd excess(kDof);
+  int beyond_joint = -1;
+  double beyond = 0.0;  // signed, outwards
   for (int j = 0; j < kDof; ++j) {
-    const double beyond = wrap(q[j] - nearest[j]);  // signed, outwards
-    if (std::abs(beyond) <= 0.5 * margin) continue;
-    excess(static_cast<Eigen::Index>(rows.size())) = std::copysign(0.5 * margin, beyond) - beyond;
-    rows.push_back(j);
+    const double offset = wrap(q[j] - nearest[j]);
+    if (std::abs(offset) <= 0.5 * margin) continue;  // within the box up to the rounding, or near
+    if (beyond_joint >= 0) return false;
+    beyond_joint = j, beyond = offset;
   }
-  if (rows.empty()) return false;
-  Eigen::MatrixXd A(rows.size(), weak);
-  for (std::size_t r = 0; r < rows.size(); ++r) A.row(static_cast<Eigen::Index>(r)) = W.row(rows[r]);
-  const Eigen::VectorXd c =
-      A.completeOrthogonalDecomposition().solve(excess.head(static_cast<Eigen::Index>(rows.size())));
-  const Vector6d step = W * c;
+  if (beyond_joint < 0) return false;
+  const Vector6d tangent = svd.V.col(kDof - 1);
+  const double along = (std::copysign(0.5 * margin, beyond) - beyond) / tangent(beyond_joint);
+  const Vector6d step = along * tangent;
   const double longest = step.cwiseAbs().maxCoeff();
   if (!(longest > 0.0) || !std::isfinite(longest)) return false;
   const double scale = std::min(1.0, newton::kMaxJointStep / longest);

@@ -421,3 +421,44 @@ def test_curve_member_on_a_limit_stays_near_the_seed() -> None:
         elif "singular" not in result.flags[nearest]:
             failures.append(f"{pose}: the nearest solution is not flagged singular")
     assert not failures, "\n".join(failures)
+
+
+#: tm5_900 poses with q3 on its limit (155 deg) and q5 = 180 deg (a curve of solutions, q6 free)
+#: and the general 6R solver's rows on main before walk_into_limits took Newton passes along the
+#: curve (deg): the seed's members, 0.07-0.38 rad beyond the q3 limit, walked into it by
+#: alternating projections, 7400 passes per root (10.2 s on the first pose; docs/general6r.md,
+#: "Walks on a curve hit by many roots").
+TM5_ON_LIMIT_ROWS = {
+    (0, 90, 155, 90, 180, 0): [
+        [0.0, 90.0, 155.0, 90.0, 180.0, 0.0],
+        [0.0, -106.4577512, -155.0, -89.9999626, -180.0, -33.5422862],
+        [10.5176321, -104.4192685, -154.7943812, -100.7863485, 169.4823679, -24.9999983],
+        [10.5176321, 111.4271233, 154.7943812, 93.7784972, 169.4823679, -24.9999983]],
+    (-90, -90, 155, 90, 180, -90): [
+        [-90.0, -70.7271097, 155.0, 104.2693959, 180.0, -123.5422862],
+        [-90.0, 54.2693585, -155.0, -104.2693585, 180.0, -90.0],
+        [-100.5176321, -68.5728767, 154.7943812, 93.7784972, 169.4823679, -114.9999983],
+        [-100.5176321, 75.5807315, -154.7943812, -100.7863485, 169.4823679, -114.9999983],
+        [-90.0, -90.0, 155.0, 90.0, 180.0, -90.0]],
+}
+
+
+@pytest.mark.parametrize("pose", list(TM5_ON_LIMIT_ROWS))
+def test_curve_members_walked_onto_a_limit_they_meet_at_a_small_angle(
+        pose: tuple[int, ...]) -> None:
+    """The general 6R solver on tm5_900's table, the target by Pinocchio: every row is exact
+    (Pinocchio), and the rows are main's (each within JOINT_TOLERANCE of one of main's, the same
+    count)."""
+    from dhkin.ik.general6r import General6RSolver
+
+    robot = dhkin.load("tm5_900")
+    T = robot.reference().fk(np.radians(pose)[None])[0]
+    answer = np.asarray(General6RSolver(robot.table).solve_one(T).q).reshape(-1, 6)
+    failures = answer_failures(robot, T, answer, f"{pose}")
+    expected = np.radians(TM5_ON_LIMIT_ROWS[pose])
+    assert len(answer) == len(expected), f"{len(answer)} rows, main {len(expected)}"
+    for row in expected:
+        nearest = np.abs(wrapped(answer - row)).max(axis=1).min()
+        if nearest > JOINT_TOLERANCE:
+            failures.append(f"{pose}: main's row {np.degrees(row)} {nearest:.2e} rad away")
+    assert not failures, "\n".join(failures)

@@ -489,22 +489,18 @@ class ClosedForm {
                  Output<std::int64_t, nb::shape<-1, kBranches>> totals,
                  Output<double, nb::shape<-1, dhkin::kWhySize>> why,
                  Output<double, nb::shape<-1, 7>> info, bool direct) {
-    const std::size_t n = targets.shape(0);
-    check_rows(n, seeds.shape(0), {q.shape(0), ok.shape(0), flags.shape(0), errors.shape(0),
-                                   totals.shape(0), why.shape(0), info.shape(0)});
-    const CallPlan call(solver_, frames);
-    const dhkin::TargetFrames& target = call.target;
-    const dhkin::Plan& plan = *call.plan;
-    nb::gil_scoped_release release;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Joints seed = seed_row(seeds, i);
+    check_rows(targets.shape(0), seeds.shape(0),
+               {q.shape(0), ok.shape(0), flags.shape(0), errors.shape(0), totals.shape(0),
+                why.shape(0), info.shape(0)});
+    for_each_pose(targets, seeds, frames, [&](std::size_t i, const dhkin::Plan& plan,
+                                              const dhkin::TargetFrames& target, const double* T,
+                                              const Joints& seed) {
       dhkin::Branches branches;
       dhkin::PoseInfo pose;
       if (direct) {
-        dhkin::solve_pose(plan, target, targets.data() + 16 * i, seed, tolerance, branches, pose);
+        dhkin::solve_pose(plan, target, T, seed, tolerance, branches, pose);
       } else {  // the pipeline itself (no direct path of either kind)
-        dhkin::pipeline_branches(plan, target, targets.data() + 16 * i, seed, tolerance, branches,
-                                 pose);
+        dhkin::pipeline_branches(plan, target, T, seed, tolerance, branches, pose);
       }
       const auto counts = dhkin::copy_totals(plan, branches, tolerance, copies);
       for (int b = 0; b < kBranches; ++b) {
@@ -517,7 +513,7 @@ class ClosedForm {
       }
       for (int k = 0; k < dhkin::kWhySize; ++k) why(i, k) = pose.why[k];
       write_info(pose, &info(i, 0));
-    }
+    });
   }
 
   // N poses without copies (one solution per branch, its in-limit copy nearest the seed)
@@ -640,17 +636,26 @@ class ClosedForm {
   void answered_by(Path path, Input<double, nb::shape<-1, 4, 4>> targets,
                    Input<double, nb::shape<-1, kDof>> seeds, double tolerance,
                    Input<double, nb::shape<2, 4, 4>> frames, Output<bool, nb::ndim<1>> answered) {
-    const std::size_t n = targets.shape(0);
-    check_rows(n, seeds.shape(0), {answered.shape(0)});
-    const CallPlan call(solver_, frames);
-    const dhkin::TargetFrames& target = call.target;
-    const dhkin::Plan& plan = *call.plan;
-    nb::gil_scoped_release release;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Joints seed = seed_row(seeds, i);
+    check_rows(targets.shape(0), seeds.shape(0), {answered.shape(0)});
+    for_each_pose(targets, seeds, frames, [&](std::size_t i, const dhkin::Plan& plan,
+                                              const dhkin::TargetFrames& target, const double* T,
+                                              const Joints& seed) {
       dhkin::Branches branches;
       dhkin::PoseInfo pose;
-      answered(i) = path(plan, target, targets.data() + 16 * i, seed, tolerance, branches, pose);
+      answered(i) = path(plan, target, T, seed, tolerance, branches, pose);
+    });
+  }
+
+  // body(i, plan, target frames, pose i's 4 x 4 row-major numbers, its seed) for each of the N
+  // poses, with the call's plan (the TCP's own where `frames` give one) and the GIL released.
+  template <typename Body>
+  void for_each_pose(Input<double, nb::shape<-1, 4, 4>> targets,
+                     Input<double, nb::shape<-1, kDof>> seeds,
+                     Input<double, nb::shape<2, 4, 4>> frames, Body body) {
+    const CallPlan call(solver_, frames);
+    nb::gil_scoped_release release;
+    for (std::size_t i = 0; i < targets.shape(0); ++i) {
+      body(i, *call.plan, call.target, targets.data() + 16 * i, seed_row(seeds, i));
     }
   }
 

@@ -171,7 +171,7 @@ def test_refined_direct_answers_says_which_poses_the_lanes_settle(name, load_rob
     rng = np.random.default_rng(43)
     q = robot.table.random_q(500, rng)
     q[400:, 4] = 0.0
-    T = np.ascontiguousarray(robot.fk(q))
+    T = np.ascontiguousarray(robot.reference().fk(q))  # Pinocchio on the generated URDF
     seeds = np.zeros((1, robot.dof))
     settled = np.zeros(len(T), np.bool_)
     robot.ik_solver.core.refined_direct_answers(T, seeds, 1e-9, robot.ik_solver.frames, settled)

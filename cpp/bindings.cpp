@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "array_io.hpp"
+#include "exact_roots_binding.hpp"
 #include "dhkin/batch.hpp"
 #include "dhkin/chain.hpp"
 #include "dhkin/expand.hpp"
@@ -25,6 +26,7 @@
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
 #include "dhkin/right_svd.hpp"
+#include "dhkin/rows.hpp"
 #include "dhkin/solver.hpp"
 
 namespace nb = nanobind;
@@ -181,7 +183,7 @@ dhkin::Chain chain_of(const nb::dict& f, const char* name) {
 }
 
 dhkin::Plan make_plan(const nb::dict& f) {
-  check_keys(f, {"family", "refine", "seed_angle", "seed_length", "deviation", "lever",
+  check_keys(f, {"family", "refine", "seed_angle", "seed_length", "deviation", "band_angle", "lever",
                  "free_joints", "geometry", "chain", "ideal", "path", "limits"},
              "plan");
   dhkin::Plan plan;
@@ -192,6 +194,7 @@ dhkin::Plan make_plan(const nb::dict& f) {
   plan.seed_angle = nb::cast<double>(f["seed_angle"]);
   plan.seed_length = nb::cast<double>(f["seed_length"]);
   plan.deviation = nb::cast<double>(f["deviation"]);
+  plan.band_angle = nb::cast<double>(f["band_angle"]);
   plan.lever = nb::cast<double>(f["lever"]);
   const auto free = nb::cast<std::tuple<int, int, int>>(f["free_joints"]);
   plan.free_wrist = std::get<0>(free);
@@ -477,8 +480,11 @@ class ClosedForm {
   }
 
   // Steps 1-3 of N poses into q (N, 8, 6), ok, flags (N, 8), errors (N, 8, 2), totals (N, 8)
-  // (solutions step 4 can give per branch), why (N, 6) and info (N, 7: status, projection,
-  // candidates, verified, dropped, best position, best rotation). Seeds: (N, 6) or (1, 6).
+  // (solutions step 4 can give per branch, the roots beyond the slots counted with their branch),
+  // why (N, 6) and info (N, 7: status, projection, candidates, verified, dropped, best position,
+  // best rotation), and the roots beyond the slots (extra_roots.hpp) into extra_q (N, E, 6),
+  // extra_branch (-1 past the pose's last), extra_flags (N, E) and extra_errors (N, E, 2); E may
+  // be 0 for a table without exact roots, else at least EXTRA_ROOTS. Seeds: (N, 6) or (1, 6).
   // `direct` false skips the direct path (every pose through the full pipeline: for tests).
   void principal(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
                  double tolerance, Input<double, nb::shape<2, 4, 4>> frames, bool copies,
@@ -488,10 +494,24 @@ class ClosedForm {
                  Output<double, nb::shape<-1, kBranches, 2>> errors,
                  Output<std::int64_t, nb::shape<-1, kBranches>> totals,
                  Output<double, nb::shape<-1, dhkin::kWhySize>> why,
-                 Output<double, nb::shape<-1, 7>> info, bool direct) {
+                 Output<double, nb::shape<-1, 7>> info,
+                 Output<double, nb::shape<-1, -1, kDof>> extra_q,
+                 Output<std::int16_t, nb::ndim<2>> extra_branch,
+                 Output<std::uint8_t, nb::ndim<2>> extra_flags,
+                 Output<double, nb::shape<-1, -1, 2>> extra_errors, bool direct) {
     check_rows(targets.shape(0), seeds.shape(0),
                {q.shape(0), ok.shape(0), flags.shape(0), errors.shape(0), totals.shape(0),
-                why.shape(0), info.shape(0)});
+                why.shape(0), info.shape(0), extra_q.shape(0), extra_branch.shape(0),
+                extra_flags.shape(0), extra_errors.shape(0)});
+    const std::size_t room = extra_q.shape(1);
+    if (extra_branch.shape(1) != room || extra_flags.shape(1) != room ||
+        extra_errors.shape(1) != room) {
+      throw std::invalid_argument("principal: the extra roots' arrays differ in width");
+    }
+    if (solver_.plan().exact_roots != nullptr &&
+        room < static_cast<std::size_t>(dhkin::ExtraRoots::kCapacity)) {
+      throw std::invalid_argument("principal: room for every root beyond the slots needed");
+    }
     for_each_pose(targets, seeds, frames, [&](std::size_t i, const dhkin::Plan& plan,
                                               const dhkin::TargetFrames& target, const double* T,
                                               const Joints& seed) {
@@ -499,8 +519,10 @@ class ClosedForm {
       dhkin::PoseInfo pose;
       if (direct) {
         dhkin::solve_pose(plan, target, T, seed, tolerance, branches, pose);
-      } else {  // the pipeline itself (no direct path of either kind)
+      } else {  // the pipeline itself (no direct path of either kind), then the roots beyond
+                // the slots as every pose that leaves the direct paths gets them
         dhkin::pipeline_branches(plan, target, T, seed, tolerance, branches, pose);
+        dhkin::add_roots_beyond_slots(plan, target, T, seed, tolerance, pose, branches);
       }
       const auto counts = dhkin::copy_totals(plan, branches, tolerance, copies);
       for (int b = 0; b < kBranches; ++b) {
@@ -510,6 +532,14 @@ class ClosedForm {
         errors(i, b, 0) = branches.errors[b].position;
         errors(i, b, 1) = branches.errors[b].rotation;
         totals(i, b) = counts[b];
+      }
+      for (std::size_t k = 0; k < room; ++k) {  // the roots beyond the slots, then empty rows
+        const bool found = static_cast<int>(k) < branches.extra.count;
+        for (int j = 0; j < kDof; ++j) extra_q(i, k, j) = found ? branches.extra.q[k][j] : 0.0;
+        extra_branch(i, k) = static_cast<std::int16_t>(found ? branches.extra.branch[k] : -1);
+        extra_flags(i, k) = found ? branches.extra.flags[k] : 0;
+        extra_errors(i, k, 0) = found ? branches.extra.errors[k].position : 0.0;
+        extra_errors(i, k, 1) = found ? branches.extra.errors[k].rotation : 0.0;
       }
       for (int k = 0; k < dhkin::kWhySize; ++k) why(i, k) = pose.why[k];
       write_info(pose, &info(i, 0));
@@ -533,6 +563,9 @@ class ClosedForm {
     const std::size_t n = targets.shape(0);
     check_rows(n, seeds.shape(0), {q.shape(0), valid.shape(0), branch.shape(0), flags.shape(0),
                                    errors.shape(0), projection.shape(0), dropped.shape(0)});
+    if (solver_.plan().exact_roots != nullptr) {
+      throw std::logic_error("nearest: a table with exact roots answers beyond the slots: rows()");
+    }
     const CallPlan call(solver_, frames);
     const dhkin::TargetFrames& target = call.target;
     const dhkin::Plan& plan = *call.plan;
@@ -543,6 +576,55 @@ class ClosedForm {
         dhkin::solve_nearest(plan, target, targets.data(), n, seeds.data(),
                              seeds.shape(0) == 1 ? 0 : kDof, tolerance, out);
     return {report.rejected, report.status, report.width};
+  }
+
+  // Completes a refined table's answers with the roots beyond its branch slots
+  // (dhkin/extra_roots.hpp): `general`, the table's dhkin._core.General6R, gives them.
+  void attach_exact_roots(nb::handle general) {
+    if (!solver_.plan().refine) {
+      throw std::invalid_argument("exact roots: the table is an exact family member (no slots to "
+                                  "complete)");
+    }
+    solver_.attach_exact_roots(dhkin::bindings::exact_roots_of(general));
+  }
+
+  // N poses as rows (dhkin/rows.hpp): (q (R, 6), branch (R,), flags (R,), errors (R, 2)),
+  // counts, projection and dropped (per pose answered), the first rejected pose or -1, its
+  // status. Every table; the batch of one whose answers reach beyond the slots.
+  nb::tuple rows(Input<double, nb::shape<-1, 4, 4>> targets, Input<double, nb::shape<-1, kDof>> seeds,
+                 double tolerance, Input<double, nb::shape<2, 4, 4>> frames, bool copies) {
+    const std::size_t n = targets.shape(0);
+    check_rows(n, seeds.shape(0), {});
+    const CallPlan call(solver_, frames);
+    dhkin::RowsAnswer out;
+    {
+      nb::gil_scoped_release release;
+      out = dhkin::solve_rows(*call.plan, call.target, targets.data(), n, seeds.data(),
+                              seeds.shape(0) == 1 ? 0 : kDof, tolerance, copies);
+    }
+    const std::size_t r = out.rows.size(), answered = out.counts.size();
+    auto q = new_array<double>({r, static_cast<std::size_t>(kDof)});
+    auto branch = new_array<std::int16_t>({r});
+    auto flags = new_array<std::uint8_t>({r});
+    auto errors = new_array<double>({r, 2});
+    for (std::size_t k = 0; k < r; ++k) {
+      const dhkin::Solution& s = out.rows[k];
+      for (int j = 0; j < kDof; ++j) q.data()[kDof * k + j] = s.q[j];
+      branch.data()[k] = static_cast<std::int16_t>(s.branch);
+      flags.data()[k] = s.flags;
+      errors.data()[2 * k] = s.error.position;
+      errors.data()[2 * k + 1] = s.error.rotation;
+    }
+    auto counts = new_array<std::int64_t>({answered});
+    auto projection = new_array<double>({answered});
+    auto dropped = new_array<std::int64_t>({answered});
+    for (std::size_t i = 0; i < answered; ++i) {
+      counts.data()[i] = out.counts[i];
+      projection.data()[i] = out.projection[i];
+      dropped.data()[i] = out.dropped[i];
+    }
+    return nb::make_tuple(q, branch, flags, errors, counts, projection, dropped, out.rejected,
+                          out.status);
   }
 
   // Whether the direct path answers each of N poses (the rest take the full pipeline); with
@@ -755,6 +837,7 @@ NB_MODULE(_core, m) {
   m.doc() = "dhkin's compiled core: chains, the closed-form IK pipeline (see cpp/dhkin/*.hpp).";
   m.attr("BRANCHES") = kBranches;
   m.attr("WHY_SIZE") = dhkin::kWhySize;
+  m.attr("EXTRA_ROOTS") = dhkin::ExtraRoots::kCapacity;
   m.attr("ORTHONORMALITY_GATE") = dhkin::kOrthonormalityGate;
   m.attr("BOTTOM_ROW_TOLERANCE") = dhkin::kBottomRowTolerance;
   m.attr("FLAG_BAND") = dhkin::kFlagBand;
@@ -865,13 +948,17 @@ NB_MODULE(_core, m) {
            "tolerance"_a.none(), "tcp"_a.none(), "copies"_a.none())
       .def("principal", &ClosedForm::principal, "targets"_a, "seeds"_a, "tolerance"_a,
            "frames"_a, "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "totals"_a, "why"_a,
-           "info"_a, "direct"_a = true)
+           "info"_a, "extra_q"_a, "extra_branch"_a, "extra_flags"_a, "extra_errors"_a,
+           "direct"_a = true)
       .def("nearest", &ClosedForm::nearest, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,
            "q"_a, "valid"_a, "branch"_a, "flags"_a, "errors"_a, "projection"_a, "dropped"_a)
       .def("direct_answers", &ClosedForm::direct_answers, "targets"_a, "seeds"_a,
            "tolerance"_a, "frames"_a, "answered"_a)
       .def("refined_direct_answers", &ClosedForm::refined_direct_answers, "targets"_a,
            "seeds"_a, "tolerance"_a, "frames"_a, "answered"_a)
+      .def("attach_exact_roots", &ClosedForm::attach_exact_roots, "general"_a)
+      .def("rows", &ClosedForm::rows, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,
+           "copies"_a)
       .def("expand", &ClosedForm::expand, "targets"_a, "seeds"_a, "tolerance"_a, "frames"_a,
            "copies"_a, "q"_a, "ok"_a, "flags"_a, "errors"_a, "out_q"_a, "out_valid"_a,
            "out_branch"_a, "out_flags"_a, "out_errors"_a);

@@ -9,12 +9,14 @@
 #include <nanobind/stl/tuple.h>
 
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "array_io.hpp"
+#include "exact_roots_binding.hpp"
 #include "dhkin/general6r/reference.hpp"
 #include "dhkin/general6r/solver.hpp"
 
@@ -257,11 +259,52 @@ class General6R {
                           owned(std::move(out.dropped), {answered}), out.rejected, out.status);
   }
 
+  const g6::Solver& solver() const { return solver_; }
+
  private:
   g6::Solver solver_;
 };
 
+// The roots of one table's exact chain to DH frame 6 (dhkin/exact_roots.hpp), by its solver.
+class GeneralRoots final : public dhkin::ExactRoots {
+ public:
+  explicit GeneralRoots(const g6::Solver& solver) : solver_(solver), tip_(solver_.dh_tip()) {}
+
+  void find(const Frame& T_dh, double verification,
+            std::vector<dhkin::ExactRoot>& out) const override {
+    out.clear();
+    // beyond the links (with the tolerance's margin) no root: nothing to eliminate
+    if (!(g6::reach_distance(T_dh) <= solver_.reach(verification, tip_))) return;
+    std::vector<g6::Root> roots;
+    g6::settled_roots(solver_, tip_, T_dh, T_dh, verification, roots);
+    out.reserve(roots.size());
+    for (const g6::Root& root : roots) {
+      dhkin::ExactRoot exact;
+      for (int j = 0; j < kDof; ++j) exact.q[j] = dhkin::wrap(root.q[j]);
+      exact.error = root.error;
+      exact.sigma = root.sigma;
+      out.push_back(exact);
+    }
+  }
+
+  double singular_band(double verification) const override {
+    return g6::singular_band(verification);
+  }
+
+ private:
+  g6::Solver solver_;
+  g6::Tip tip_;
+};
+
 }  // namespace
+
+std::shared_ptr<const dhkin::ExactRoots> dhkin::bindings::exact_roots_of(nb::handle general) {
+  const General6R* solver = nullptr;
+  if (!nb::try_cast<const General6R*>(general, solver) || solver == nullptr) {
+    throw nb::type_error("exact roots: expected a dhkin._core.General6R");
+  }
+  return std::make_shared<const GeneralRoots>(solver->solver());
+}
 
 void bind_general6r(nb::module_& m) {
   nb::class_<General6R>(m, "General6R")

@@ -64,6 +64,7 @@ from numpy.typing import NDArray
 
 import dhkin
 from dhkin.errors import FamilyError
+from dhkin.ik.core import EXTRA_ROOTS
 from dhkin.ik.workers import default_workers
 from dhkin.opw import opw_parameters
 from dhkin.transforms import invert, pose_error
@@ -519,6 +520,9 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
     totals = np.empty((n, B), np.int64)
     why = np.empty((n, 6))
     info = np.empty((n, 7))
+    E = EXTRA_ROOTS if solver.completed else 0
+    extra = (np.empty((n, E, dof)), np.empty((n, E), np.int16), np.empty((n, E), np.uint8),
+             np.empty((n, E, 2)))
     out = solver._batch_arrays(n, B)
 
     def best(call: Callable[[], object]) -> float:  # fastest of the runs: least disturbed
@@ -538,9 +542,9 @@ def profile_dhkin(robot: dhkin.Robot, poses: PoseSet, runs: int) -> list[tuple[s
     direct_only = best(lambda: core.direct_answers(T, seeds, 1e-9, solver.frames, done))
     taken = 100.0 * float(done.mean())
     branches = best(lambda: core.principal(T, seeds, 1e-9, solver.frames, False, q, ok, flags,
-                                           errors, totals, why, info))
+                                           errors, totals, why, info, *extra))
     pipeline = best(lambda: core.principal(T, seeds, 1e-9, solver.frames, False, q, ok, flags,
-                                           errors, totals, why, info, direct=False))
+                                           errors, totals, why, info, *extra, direct=False))
     expand = best(lambda: core.expand(T, seeds, 1e-9, solver.frames, False, q, ok, flags, errors,
                                       *out))
     batch = best(lambda: robot.ik_batch(T, copies=False, workers=1))

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import dhkin
-from dhkin.ik.core import WHY_SIZE
+from dhkin.ik.core import EXTRA_ROOTS, WHY_SIZE
 from dhkin.ik.solver import INFO
 from dhkin.transforms import rot_x
 from tests.test_ik_batch import ROBOTS, pose_set
@@ -32,10 +32,13 @@ N_POSES = 4000
 
 def _outputs(solver, n_poses: int) -> tuple[np.ndarray, ...]:
     B, n = solver.n_branches, solver.dof
+    E = EXTRA_ROOTS if solver.completed else 0
     return (np.zeros((n_poses, B, n)), np.zeros((n_poses, B), np.bool_),
             np.zeros((n_poses, B), np.uint8), np.zeros((n_poses, B, 2)),
             np.zeros((n_poses, B), np.int64), np.zeros((n_poses, WHY_SIZE)),
-            np.zeros((n_poses, INFO.size)))
+            np.zeros((n_poses, INFO.size)), np.zeros((n_poses, E, n)),
+            np.zeros((n_poses, E), np.int16), np.zeros((n_poses, E), np.uint8),
+            np.zeros((n_poses, E, 2)))
 
 
 def both_paths(robot: dhkin.Robot, T: np.ndarray, seeds: np.ndarray, frames: np.ndarray,
@@ -52,8 +55,8 @@ def both_paths(robot: dhkin.Robot, T: np.ndarray, seeds: np.ndarray, frames: np.
 
 def assert_same_answers(full: tuple[np.ndarray, ...], direct: tuple[np.ndarray, ...],
                         done: np.ndarray) -> None:
-    q, ok, flags, errors, totals, why, info = full
-    dq, dok, dflags, derrors, dtotals, dwhy, dinfo = direct
+    q, ok, flags, errors, totals, why, info = full[:7]
+    dq, dok, dflags, derrors, dtotals, dwhy, dinfo = direct[:7]
     np.testing.assert_array_equal(dok[done], ok[done])
     kept = ok & done[:, None]  # values of branches without a solution are not part of the answer
     np.testing.assert_array_equal(dq[kept], q[kept])
@@ -150,8 +153,9 @@ def test_refined_direct_path_answers_as_the_pipeline(name, load_robot):
     T, seeds = pose_set(robot, 600, seed=37)
     for seed in (np.zeros((1, robot.dof)), seeds):
         full, direct, _ = both_paths(robot, T, seed, robot.ik_solver.frames, False)
-        q, ok, flags, errors, totals, why, info = full
-        dq, dok, dflags, derrors, dtotals, dwhy, dinfo = direct
+        q, ok, flags, errors, totals, why, info, extra_q, extra_branch, extra_flags, _ = full
+        dq, dok, dflags, derrors, dtotals, dwhy, dinfo, dextra_q, dextra_branch, dextra_flags, _ = \
+            direct
         np.testing.assert_array_equal(dok, ok)
         np.testing.assert_array_equal(dflags[ok], flags[ok])
         np.testing.assert_array_equal(dtotals, totals)
@@ -159,6 +163,12 @@ def test_refined_direct_path_answers_as_the_pipeline(name, load_robot):
         np.testing.assert_array_equal(dinfo, info)
         np.testing.assert_allclose(np.angle(np.exp(1j * (dq[ok] - q[ok]))), 0.0, atol=1e-9)
         assert (derrors[ok] <= np.maximum(errors[ok], 1e-12)).all()
+        # the roots beyond the slots: the pipeline's (every pose it takes gets them) on the poses
+        # the direct path settles too, where only a branch moved beyond the band asks for them
+        np.testing.assert_array_equal(dextra_branch, extra_branch)
+        found = extra_branch >= 0
+        np.testing.assert_array_equal(dextra_flags[found], extra_flags[found])
+        np.testing.assert_array_equal(dextra_q[found], extra_q[found])
 
 
 @pytest.mark.parametrize("name", REFINED_TABLES)

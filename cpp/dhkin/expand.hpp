@@ -21,28 +21,33 @@ struct Solution {
 };
 
 // Per branch: how many solutions step 4 can give (every in-limit copy, or 1 when `copies` is
-// false and the branch has an in-limit copy; 0 for a branch that is not ok).
+// false and the branch has an in-limit copy; 0 for a branch that is not ok), the roots beyond the
+// slots counted with their branch.
 inline std::array<long, kBranches> copy_totals(const Plan& plan, const Branches& branches,
                                                double tolerance, bool copies) {
   const double slack = tolerance / plan.lever;
-  std::array<long, kBranches> totals{};
-  for (int b = 0; b < kBranches; ++b) {
-    long total = branches.ok[b] ? 1 : 0;
+  const auto total_of = [&](const Joints& q) {
+    long total = 1;
     for (int j = 0; j < kDof && total != 0; ++j) {
-      const long count = turn_range(plan.limits[j], plan.revolute(j), branches.q[b][j], slack).count;
+      const long count = turn_range(plan.limits[j], plan.revolute(j), q[j], slack).count;
       total = copies ? total * count : std::min(total, count);
     }
-    totals[b] = total;
-  }
+    return total;
+  };
+  std::array<long, kBranches> totals{};
+  for (int b = 0; b < kBranches; ++b) totals[b] = branches.ok[b] ? total_of(branches.q[b]) : 0;
+  // a root beyond the slots counts with its branch
+  const ExtraRoots& extra = branches.extra;
+  for (int k = 0; k < extra.count; ++k) totals[extra.branch[k]] += total_of(extra.q[k]);
   return totals;
 }
 
 // Step 4 for one pose: `emit(solution)` for each solution, in order of branch, then of copy
-// (mixed radix over the joints' copies, last joint fastest); with `copies` false one per branch,
-// the copy nearest the seed (the eight branches at once, one per lane: the bits the scalar
-// nearest_turn gives each). A copy set onto a limit, and every copy of a branch whose error is
-// within kCopyMargin of the tolerance, is verified again (and dropped when it fails). Returns the
-// count, or -1 as soon as `emit` returns false (no room).
+// (mixed radix over the joints' copies, last joint fastest), then the roots beyond the slots in
+// their order; with `copies` false one per root, the copy nearest the seed (the eight branches at
+// once, one per lane: the bits the scalar nearest_turn gives each). A copy set onto a limit, and
+// every copy of a root whose error is within kCopyMargin of the tolerance, is verified again (and
+// dropped when it fails). Returns the count, or -1 as soon as `emit` returns false (no room).
 template <class Emit>
 long expand(const Plan& plan, const TargetFrames& frames, const double* T, const Joints& seed,
             double tolerance, bool copies, const Branches& branches, Emit&& emit) {
@@ -87,12 +92,33 @@ long expand(const Plan& plan, const TargetFrames& frames, const double* T, const
       if (!emit(solution)) return -1;
       ++count;
     }
+    const ExtraRoots& extra = branches.extra;
+    for (int k = 0; k < extra.count; ++k) {  // the roots beyond the slots, one at a time
+      Solution solution;
+      bool exists = true, clipped = false;
+      for (int j = 0; j < kDof && exists; ++j) {
+        const bool revolute = plan.revolute(j);
+        const double value = extra.q[k][j];
+        long turn = 0;
+        exists = nearest_turn(plan.limits[j], revolute, value, slack, seed[j], turn);
+        solution.q[j] = placed(plan.limits[j], revolute, value, turn);
+        clipped = clipped || solution.q[j] != shifted<double>(revolute, value, turn);
+      }
+      if (!exists) continue;
+      solution.error = extra.errors[k];
+      const bool recheck = extra.errors[k].largest() > tolerance - kCopyMargin;
+      if ((clipped || recheck) && !verified(solution)) continue;
+      solution.branch = extra.branch[k];
+      solution.flags = extra.flags[k];
+      if (!emit(solution)) return -1;
+      ++count;
+    }
     return count;
   }
-  std::array<long, kDof> first{}, counts{}, digits{};
-  for (int b = 0; b < kBranches; ++b) {
-    if (!branches.ok[b]) continue;
-    const Joints& q = branches.q[b];
+  // every in-limit copy of one root: false as soon as `emit` has no room
+  const auto every_copy = [&](const Joints& q, const PoseError& error, int branch,
+                              std::uint8_t flags) {
+    std::array<long, kDof> first{}, counts{}, digits{};
     long total = 1;
     for (int j = 0; j < kDof; ++j) {  // every in-limit copy
       const TurnRange range = turn_range(plan.limits[j], plan.revolute(j), q[j], slack);
@@ -100,7 +126,7 @@ long expand(const Plan& plan, const TargetFrames& frames, const double* T, const
       total *= counts[j];
       digits[j] = 0;
     }
-    const bool recheck = branches.errors[b].largest() > tolerance - kCopyMargin;
+    const bool recheck = error.largest() > tolerance - kCopyMargin;
     for (long k = 0; k < total; ++k) {
       Solution solution;
       bool clipped = false;
@@ -111,12 +137,12 @@ long expand(const Plan& plan, const TargetFrames& frames, const double* T, const
         solution.q[j] = placed(plan.limits[j], revolute, q[j], turn);
         clipped = clipped || solution.q[j] != shifted;
       }
-      solution.error = branches.errors[b];
+      solution.error = error;
       const bool keep = !(clipped || recheck) || verified(solution);
       if (keep) {
-        solution.branch = b;
-        solution.flags = branches.flags[b];
-        if (!emit(solution)) return -1;
+        solution.branch = branch;
+        solution.flags = flags;
+        if (!emit(solution)) return false;
         ++count;
       }
       for (int j = kDof - 1; j >= 0; --j) {  // next mixed-radix digit, last joint fastest
@@ -124,6 +150,16 @@ long expand(const Plan& plan, const TargetFrames& frames, const double* T, const
         digits[j] = 0;
       }
     }
+    return true;
+  };
+  for (int b = 0; b < kBranches; ++b) {
+    if (branches.ok[b] && !every_copy(branches.q[b], branches.errors[b], b, branches.flags[b])) {
+      return -1;
+    }
+  }
+  const ExtraRoots& extra = branches.extra;
+  for (int k = 0; k < extra.count; ++k) {
+    if (!every_copy(extra.q[k], extra.errors[k], extra.branch[k], extra.flags[k])) return -1;
   }
   return count;
 }

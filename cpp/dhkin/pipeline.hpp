@@ -34,6 +34,7 @@
 #include <cmath>
 
 #include "dhkin/direct.hpp"
+#include "dhkin/extra_roots.hpp"
 #include "dhkin/members.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/pose.hpp"
@@ -272,15 +273,33 @@ inline void pipeline_branches(const Plan& plan, const TargetFrames& frames, cons
   info.best_position = best_position, info.best_rotation = best_rotation;
 }
 
+// The roots beyond the slots of a pose of a refined table whose exact roots the plan holds
+// (extra_roots.hpp), added to `branches`; nothing for any other table or a rejected pose.
+inline void add_roots_beyond_slots(const Plan& plan, const TargetFrames& frames, const double* T,
+                                   const Joints& seed, double tolerance, const PoseInfo& info,
+                                   Branches& branches) {
+  if (plan.exact_roots == nullptr || info.status != kUsable) return;
+  PoseTargets targets;
+  int status = kUsable;
+  double projection = 0.0;
+  pose_targets(frames, T, seed, status, projection, targets);
+  const double verification = plan.verification_tolerance(tolerance);
+  add_exact_roots(plan, frames, targets, verification, plan.clamp(verification), branches);
+}
+
 // Steps 1-3 for one pose (any pose): on a refined table the refined direct path, else the
-// pipeline.
+// pipeline; then the roots beyond the slots where the pose may have some: it left the refined
+// direct path, or a branch moved beyond the band there (extra_roots.hpp).
 inline void solve_branches(const Plan& plan, const TargetFrames& frames, const double* T,
                            const Joints& seed, double tolerance, Branches& branches,
                            PoseInfo& info) {
-  if (plan.refine && direct_refined_branches(plan, frames, T, seed, tolerance, branches, info)) {
-    return;
+  branches.extra.count = 0;
+  const bool direct =
+      plan.refine && direct_refined_branches(plan, frames, T, seed, tolerance, branches, info);
+  if (!direct) pipeline_branches(plan, frames, T, seed, tolerance, branches, info);
+  if (!direct || info.beyond_band) {
+    add_roots_beyond_slots(plan, frames, T, seed, tolerance, info, branches);
   }
-  pipeline_branches(plan, frames, T, seed, tolerance, branches, info);
 }
 
 // Steps 1-3 for one pose: the direct path, else the pipeline.

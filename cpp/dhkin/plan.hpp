@@ -14,6 +14,7 @@
 #include "dhkin/bands.hpp"
 #include "dhkin/chain.hpp"
 #include "dhkin/copies.hpp"
+#include "dhkin/exact_roots.hpp"
 #include "dhkin/family.hpp"
 #include "dhkin/offset.hpp"
 #include "dhkin/spherical.hpp"
@@ -56,6 +57,10 @@ struct Plan {
   double seed_length = 0.0;   // m: distance at or below which the seed's q1 / q2 is tried
   double deviation = 0.0;     // m: how far the exact chain's poses are from the ideal model's
   double lever = 1.0;         // m: max(1, table scale): how far a point moves per radian
+  // rad: the family band's angle on a refined table (0 on an exact one): the exact chain's
+  // constants lie within it of the ideal model's, so a root refined from an ideal candidate that
+  // moved farther than this sits where the two models' roots need not correspond one to one
+  double band_angle = 0.0;
   int free_wrist = 3, free_elbow = 1, free_shoulder = 0;  // the free joint of each singularity
   SphericalGeometry spherical;  // the spherical-wrist and Stanford families
   OffsetGeometry offset;        // the offset-wrist family
@@ -63,6 +68,9 @@ struct Plan {
   Chain ideal;                  // the ideal model's chain
   std::vector<ModelStep> path;  // one step per constant frame (dof + 1)
   std::array<JointLimit, kDof> limits{};
+  // a refined table's exact chain solved without the families' branches (extra_roots.hpp), or
+  // none (exact tables, a prismatic joint); owned by the solver that holds the plan
+  const ExactRoots* exact_roots = nullptr;
 
   bool revolute(int j) const { return chain.joints[j].revolute; }
 
@@ -179,17 +187,36 @@ struct Plan {
   }
 };
 
-// The verified principal solution of each branch of one pose (steps 1-3 of the pipeline).
+// Roots of a refined table's exact chain beyond the branch slots (extra_roots.hpp): near the
+// ideal model's singular sets the exact chain can have more isolated roots than the eight slots
+// hold. Each keeps the branch whose configuration the ideal model gives its joint values.
+struct ExtraRoots {
+  // A six-revolute pose has at most 16 isolated roots (the degree of its polynomial), so at most
+  // 16 lie beyond the slots.
+  static constexpr int kCapacity = 16;
+  int count = 0;
+  std::array<Joints, kCapacity> q;
+  std::array<int, kCapacity> branch;
+  std::array<std::uint8_t, kCapacity> flags;
+  std::array<PoseError, kCapacity> errors;
+};
+
+// The verified principal solution of each branch of one pose (steps 1-3 of the pipeline), and
+// on a refined table the roots beyond the slots.
 struct Branches {
   std::array<Joints, kBranches> q{};
   std::array<bool, kBranches> ok{};
   std::array<std::uint8_t, kBranches> flags{};
   std::array<PoseError, kBranches> errors{};
+  ExtraRoots extra;
 
-  // Whether `candidate` equals an ok branch's solution (2 kMergeAngle, mod 2pi).
+  // Whether `candidate` equals an ok branch's solution or an extra root (2 kMergeAngle, mod 2pi).
   bool known(const Plan& plan, const Joints& candidate) const {
     for (int b = 0; b < kBranches; ++b) {
       if (ok[b] && plan.same(candidate, q[b], 2.0 * kMergeAngle)) return true;
+    }
+    for (int k = 0; k < extra.count; ++k) {
+      if (plan.same(candidate, extra.q[k], 2.0 * kMergeAngle)) return true;
     }
     return false;
   }
@@ -203,6 +230,9 @@ struct PoseInfo {
   int verified = 0;          // branches whose solution verified (after merging)
   int dropped = 0;           // branches with a candidate none of which verified
   double best_position = INFINITY, best_rotation = INFINITY;  // closest dropped candidate
+  // the refined direct path moved some branch farther than the band angle from its ideal
+  // candidate (Plan::band_angle): the exact chain may have roots the slots do not hold
+  bool beyond_band = false;
   std::array<double, kWhySize> why{};  // numbers an empty answer is explained with (NaN: unset)
 };
 

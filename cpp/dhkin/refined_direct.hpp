@@ -38,6 +38,17 @@ inline Mask finite_lanes(const JointsT<Lanes>& q) {
   return out;
 }
 
+// Whether refinement moved some valid branch farther than the band angle from its ideal
+// candidate on some revolute joint (mod 2pi).
+inline bool moved_beyond_band(const Plan& plan, const JointsT<Lanes>& ideal_q,
+                              const JointsT<Lanes>& q, Mask valid) {
+  Mask moved = every_lane<Lanes>(false);
+  for (int j = 0; j < kDof; ++j) {
+    if (plan.revolute(j)) moved = moved || abs(wrap(q[j] - ideal_q[j])) > plan.band_angle;
+  }
+  return any(valid && moved);
+}
+
 // Steps 1-3 for a regular pose of a refined table of the spherical-wrist or offset-wrist family;
 // false (outputs undefined) for a pose that needs the pipeline. A rejected pose or seed is
 // answered here (info.status).
@@ -67,6 +78,7 @@ inline bool direct_refined_branches(const Plan& plan, const TargetFrames& frames
     }
   }
   JointsT<Lanes> q = wrapped_branches(plan, found);
+  const JointsT<Lanes> ideal_q = q;
   const LaneRefinement refined =
       refine_lanes(plan.chain, ChainShape(plan.chain), targets.T_at, q, found.valid, tolerance);
   if (any(found.valid && !refined.settled)) return false;  // for the scalar refinement
@@ -75,6 +87,9 @@ inline bool direct_refined_branches(const Plan& plan, const TargetFrames& frames
   if (any(found.valid && !errors.within(tolerance))) return false;
   if (two_branches_one_solution(plan, q, found.valid)) return false;  // to be merged
   info.why = found.why;
+  // from the regular candidates alone (before the seed's root is looked for): a property of the
+  // pose, whatever the seed
+  info.beyond_band = moved_beyond_band(plan, ideal_q, q, found.valid);
   alignas(64) double values[kDof][kLanes], regular_q[kDof][kLanes], position[kLanes],
       rotation[kLanes];
   alignas(64) std::int64_t regular_flags[kLanes];

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstring>
+#include <memory>
 #include <utility>
 
 #include "dhkin/plan.hpp"
@@ -18,6 +19,13 @@ class ClosedFormSolver {
   }
 
   const Plan& plan() const { return plan_; }
+
+  // The exact roots that complete a refined table's answers (extra_roots.hpp), held here and set
+  // in every plan this solver gives.
+  void attach_exact_roots(std::shared_ptr<const ExactRoots> roots) {
+    exact_roots_ = std::move(roots);
+    plan_.exact_roots = plan_at_default_.exact_roots = exact_roots_.get();
+  }
   const TargetFrames& default_frames() const { return default_frames_; }
 
   // The plan whose chains end at the frames' TCP point. `storage` holds a new plan when one is
@@ -39,6 +47,7 @@ class ClosedFormSolver {
   Plan plan_;
   TargetFrames default_frames_;
   Plan plan_at_default_;
+  std::shared_ptr<const ExactRoots> exact_roots_;
 };
 
 }  // namespace dhkin

@@ -7,6 +7,7 @@ from numpy.typing import NDArray
 
 BRANCHES: int
 WHY_SIZE: int
+EXTRA_ROOTS: int
 ORTHONORMALITY_GATE: float
 BOTTOM_ROW_TOLERANCE: float
 FLAG_BAND: float
@@ -90,6 +91,9 @@ class ClosedForm:
                 valid: NDArray[np.bool_], branch: NDArray[np.int16], flags: NDArray[np.uint8],
                 errors: NDArray[np.float64], projection: NDArray[np.float64],
                 dropped: NDArray[np.int64]) -> tuple[int, int, int]: ...
+    def attach_exact_roots(self, general: General6R) -> None: ...
+    def rows(self, targets: NDArray[np.float64], seeds: NDArray[np.float64], tolerance: float,
+             frames: NDArray[np.float64], copies: bool) -> tuple[Any, ...]: ...
     def direct_answers(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
                        tolerance: float, frames: NDArray[np.float64],
                        answered: NDArray[np.bool_]) -> None: ...

@@ -205,7 +205,9 @@ class Robot:
         """IK of N poses (N, 4, 4) -> solutions (N, m, n) and validity mask (N, m).
 
         The same solutions as :meth:`ik` pose by pose, in the same order; rows are padded to the
-        largest count m (m <= 8 without copies; with every copy a UR arm's +-360 deg joints give
+        largest count m (without copies m <= 8 on an exact table, and up to 8 + 16 on a refined
+        one, whose exact chain can have roots beyond the eight branches near the ideal model's
+        singular sets; with every copy a UR arm's +-360 deg joints give
         up to 256 or more per pose: see :meth:`ik_batch_chunks` for very large batches).
         ``workers`` threads share the poses (default: the CPUs this process may use; the
         result does not depend on it). Without a closed-form family the general 6R solver

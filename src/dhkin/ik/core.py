@@ -42,6 +42,9 @@ SPHERICAL_WRIST, STANFORD, OFFSET_WRIST = 1, 2, 3
 BRANCHES: int = _core.BRANCHES
 #: Numbers an empty answer is explained with (each family's ``explain``).
 WHY_SIZE: int = _core.WHY_SIZE
+#: Most roots a refined table's pose has beyond its branch slots (a six-revolute pose has at
+#: most 16 isolated roots; cpp/dhkin/extra_roots.hpp).
+EXTRA_ROOTS: int = _core.EXTRA_ROOTS
 
 
 def geometry_fields(values: dict[str, ArrayLike]) -> dict[str, NDArray[np.float64]]:

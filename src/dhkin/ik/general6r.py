@@ -335,7 +335,6 @@ class General6RSolver:
                 index = first + int(rejected)
                 raise InputError(pose_error_message(f"T[{index}]", targets[index], status),
                                  field="T", index=index)
-        n_poses = targets.shape[0]
         q = np.concatenate([np.asarray(p[0][0]) for p in parts]) if parts else np.zeros((0, 6))
         errors = (np.concatenate([np.asarray(p[0][1]) for p in parts]) if parts
                   else np.zeros((0, 2)))
@@ -343,26 +342,13 @@ class General6RSolver:
                     else np.zeros(0, np.uint8))
         counts = (np.concatenate([np.asarray(p[1]) for p in parts]) if parts
                   else np.zeros(0, np.int64))
-        width = int(counts.max()) if n_poses else 0
-        pose = np.repeat(np.arange(n_poses), counts)
-        slot = np.arange(q.shape[0]) - np.repeat(np.cumsum(counts) - counts, counts)
-        out_q = np.zeros((n_poses, width, 6))
-        valid = np.zeros((n_poses, width), np.bool_)
-        flags = np.zeros((n_poses, width), np.uint8)
-        branch = np.full((n_poses, width), -1, np.int16)
-        residuals = np.zeros((n_poses, width, 2))
-        out_q[pose, slot] = q
-        valid[pose, slot] = True
-        flags[pose, slot] = np.where(singular != 0, SINGULAR, 0)
-        branch[pose, slot] = 0
-        residuals[pose, slot] = errors
         projection = (np.concatenate([np.asarray(p[2]) for p in parts]) if parts
                       else np.zeros(0))
         dropped = (np.concatenate([np.asarray(p[3]) for p in parts]) if parts
                    else np.zeros(0, np.int64))
-        return IKBatch(q=out_q, valid=valid, flags=flags, branch=branch,
-                       branch_labels=self.branch_labels, family=self.family,
-                       residuals=residuals, projection=projection, dropped=dropped)
+        return IKBatch.from_rows(q, np.where(singular != 0, SINGULAR, 0).astype(np.uint8),
+                                 np.zeros(q.shape[0], np.int16), errors, counts,
+                                 self.branch_labels, self.family, projection, dropped)
 
     def _configure(self, branch: int, turns: tuple[int, ...]) -> Configuration:
         """A solution's Configuration (one branch: the general solver has no labels)."""

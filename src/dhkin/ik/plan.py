@@ -69,6 +69,9 @@ def plan_fields(table: DHTable, fit: FamilyFit) -> dict[str, Any]:
         "seed_angle": FLAG_BAND + (BAND.angle if fit.refine else 0.0),
         "seed_length": FLAG_BAND * scale + (BAND.length if fit.refine else 0.0),
         "deviation": 2.0 * deviation,
+        # beyond it a refined branch's root and the ideal model's need not correspond one to one
+        # (cpp/dhkin/extra_roots.hpp)
+        "band_angle": BAND.angle if fit.refine else 0.0,
         "lever": lever,
         "free_joints": tuple(int(j) for j in fit.solved.free_joints),
         "geometry": geometry,

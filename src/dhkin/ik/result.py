@@ -252,6 +252,33 @@ class IKBatch:
         """Number of solutions of each pose, (N,)."""
         return self.valid.sum(axis=1)
 
+    @classmethod
+    def from_rows(cls, q: NDArray[np.float64], flags: NDArray[np.uint8],
+                  branch: NDArray[np.int16], residuals: NDArray[np.float64],
+                  counts: NDArray[np.int64], branch_labels: tuple[Mapping[str, str], ...],
+                  family: str, projection: NDArray[np.float64],
+                  dropped: NDArray[np.int64]) -> IKBatch:
+        """The batch of N poses whose R solutions come as rows, pose after pose: q (R, n),
+        flags, branch (R,), residuals (R, 2), ``counts`` (N,) rows per pose; padded to the
+        largest count."""
+        n_poses = counts.shape[0]
+        width = int(counts.max()) if n_poses else 0
+        pose = np.repeat(np.arange(n_poses), counts)
+        slot = np.arange(q.shape[0]) - np.repeat(np.cumsum(counts) - counts, counts)
+        out_q = np.zeros((n_poses, width, q.shape[1]))
+        valid = np.zeros((n_poses, width), np.bool_)
+        out_flags = np.zeros((n_poses, width), np.uint8)
+        out_branch = np.full((n_poses, width), -1, np.int16)
+        out_residuals = np.zeros((n_poses, width, 2))
+        out_q[pose, slot] = q
+        valid[pose, slot] = True
+        out_flags[pose, slot] = flags
+        out_branch[pose, slot] = branch
+        out_residuals[pose, slot] = residuals
+        return cls(q=out_q, valid=valid, flags=out_flags, branch=out_branch,
+                   branch_labels=branch_labels, family=family, residuals=out_residuals,
+                   projection=projection, dropped=dropped)
+
 
 @dataclass(frozen=True)
 class BranchSolutions:
@@ -259,7 +286,12 @@ class BranchSolutions:
     copies: ``q`` (N, B, n) with revolute values in (-pi, pi] (zeros where not ``valid``),
     ``valid`` (N, B), ``flags`` (N, B) singularity bits, ``residuals`` (N, B, 2) position (m)
     and rotation (rad) errors, ``dropped`` (N,) branches that did not settle on the exact chain.
-    Branches merged at a singularity (the two wrist branches at q5 = 0) are one valid row."""
+    Branches merged at a singularity (the two wrist branches at q5 = 0) are one valid row.
+
+    A refined table's pose can have more isolated roots than branches (near the ideal model's
+    singular sets): those beyond the slots are ``extra_q`` (N, E, n), ``extra_branch`` (N, E)
+    (the branch whose configuration the ideal model gives the root; -1 past a pose's last),
+    ``extra_flags`` and ``extra_residuals`` (E = 0 on every other table)."""
 
     q: NDArray[np.float64]
     valid: NDArray[np.bool_]
@@ -267,3 +299,8 @@ class BranchSolutions:
     residuals: NDArray[np.float64]
     branch_labels: tuple[Mapping[str, str], ...]
     dropped: NDArray[np.int64]
+    extra_q: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 0, 6)))
+    extra_branch: NDArray[np.int16] = field(default_factory=lambda: np.zeros((0, 0), np.int16))
+    extra_flags: NDArray[np.uint8] = field(default_factory=lambda: np.zeros((0, 0), np.uint8))
+    extra_residuals: NDArray[np.float64] = field(
+        default_factory=lambda: np.zeros((0, 0, 2)))

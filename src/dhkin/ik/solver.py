@@ -25,7 +25,14 @@ from numpy.typing import ArrayLike, NDArray
 from dhkin import _core
 from dhkin.dh import DHTable
 from dhkin.errors import InputError
-from dhkin.ik.core import BRANCHES, STATUS_BAD_SEED, WHY_SIZE, pose_status, project
+from dhkin.ik.core import (
+    BRANCHES,
+    EXTRA_ROOTS,
+    STATUS_BAD_SEED,
+    WHY_SIZE,
+    pose_status,
+    project,
+)
 from dhkin.ik.family import FamilyFit
 from dhkin.ik.inputs import (
     TWO_PI,
@@ -96,6 +103,15 @@ class ClosedFormSolver:
         self._base_inverse = invert(table.base)
         self.frames = self.frames_for(None)
         self.core = _core.ClosedForm(self.plan, self.frames)
+        #: Whether answers reach beyond the branch slots: a refined table of six revolute joints
+        #: is completed by the general 6R solver's roots of its exact chain wherever the slots may
+        #: not hold every root (cpp/dhkin/extra_roots.hpp); its batches come from the core as rows.
+        self.completed = bool(fit.refine and table.dof == 6
+                              and all(j.is_revolute for j in table.joints))
+        if self.completed:
+            from dhkin.ik.general6r import General6RSolver
+
+            self.core.attach_exact_roots(General6RSolver(table).core)
         self._configure = _Configurations(self.branch_labels)
         self.core.bind_results(IKSolutions, self._configure, self.family)
         #: The common single call made whole in the core (bound once: Robot.ik calls it first):
@@ -108,10 +124,13 @@ class ClosedFormSolver:
         spans = table.upper - table.lower
         revolute = np.array([j.is_revolute for j in table.joints])
         copies = np.where(revolute, np.floor(spans / TWO_PI) + 2, 1).astype(np.int64)
+        #: Most roots one pose can have: a slot per branch, and on a completed table up to
+        #: EXTRA_ROOTS beyond them.
+        self.max_roots = self.n_branches + (EXTRA_ROOTS if self.completed else 0)
         #: Most solutions one pose can have with every copy: a revolute joint has at most
         #: 2 * MAX_JOINT_TURNS + 2 = 6 copies, since every DHTable keeps its limits within
         #: +-dhkin.dh.MAX_JOINT_TURNS turns (what bounds the buffers sized by this number).
-        self.max_solutions = int(self.n_branches * np.prod(copies))
+        self.max_solutions = int(self.max_roots * np.prod(copies))
 
     def __repr__(self) -> str:
         mode = "refined on the exact chain" if self.fit.refine else "exact family"
@@ -245,6 +264,9 @@ class ClosedFormSolver:
         (step 4) straight into the result. Without copies the result is B wide (then trimmed to
         the widest pose); with every copy each chunk is expanded into its own arrays and the
         chunks are joined at the end. Memory: the result and one chunk's work."""
+        if self.completed:
+            return self._batch_rows(targets, seeds, tolerance, frames, copies, chunk_size,
+                                    first_index, workers)
         if not copies:
             return self._batch_nearest(targets, seeds, tolerance, frames, chunk_size,
                                        first_index, workers)
@@ -259,7 +281,7 @@ class ClosedFormSolver:
             part = seeds if seeds.shape[0] == 1 else seeds[start:stop]
             principal = self._principal(targets[start:stop], part, tolerance, frames, copies,
                                         first_index + start, workers)
-            totals, info = principal[4:]
+            totals, info = principal[4:6]
             projection[start:stop] = info[:, INFO.projection]
             dropped[start:stop] = info[:, INFO.dropped]
             chunk_width = int(totals.sum(axis=1).max()) if stop > start else 0
@@ -332,6 +354,39 @@ class ClosedFormSolver:
                        branch_labels=self.branch_labels, family=self.family,
                        residuals=out_errors, projection=projection, dropped=dropped)
 
+    def _batch_rows(self, targets: NDArray[np.float64], seeds: NDArray[np.float64],
+                    tolerance: float, frames: NDArray[np.float64], copies: bool,
+                    chunk_size: int, first_index: int, workers: int) -> IKBatch:
+        """solve_batch of a completed table: the core answers each slice of poses as rows
+        (``ClosedForm.rows``: a pose may have more solutions than branch slots), joined and
+        padded to the largest count."""
+        parts: dict[int, tuple[Any, ...]] = {}
+        for start in range(0, targets.shape[0], chunk_size):
+            stop = min(start + chunk_size, targets.shape[0])
+
+            def solve(a: int, b: int, start: int = start) -> None:
+                a, b = start + a, start + b
+                parts[a] = self.core.rows(targets[a:b],
+                                          seeds if seeds.shape[0] == 1 else seeds[a:b],
+                                          tolerance, frames, copies)
+
+            _in_slices(stop - start, workers, solve)
+            rejected = [(first + int(part[7]), int(part[8])) for first, part in parts.items()
+                        if part[7] >= 0]
+            if rejected:
+                index, status = min(rejected)
+                self._raise_status(targets[index], status, first_index + index)
+        ordered = [parts[first] for first in sorted(parts)]
+
+        def joined(k: int, empty: NDArray[Any]) -> NDArray[Any]:
+            return np.concatenate([part[k] for part in ordered]) if ordered else empty
+
+        return IKBatch.from_rows(
+            joined(0, np.zeros((0, self.dof))), joined(2, np.zeros(0, np.uint8)),
+            joined(1, np.zeros(0, np.int16)), joined(3, np.zeros((0, 2))),
+            joined(4, np.zeros(0, np.int64)), self.branch_labels, self.family,
+            joined(5, np.zeros(0)), joined(6, np.zeros(0, np.int64)))
+
     def _batch_arrays(self, n_poses: int, width: int) -> tuple[NDArray[Any], ...]:
         """Result arrays of step 4: q, valid, branch, flags, residuals."""
         return (np.zeros((n_poses, width, self.dof)), np.zeros((n_poses, width), np.bool_),
@@ -342,22 +397,26 @@ class ClosedFormSolver:
                    tolerance: float, frames: NDArray[np.float64], copies: bool,
                    first_index: int, workers: int = 1) -> tuple[NDArray[Any], ...]:
         """Steps 1-3 for checked poses: q, ok, flags, errors, totals, info (the core's
-        ``principal``), in contiguous slices on up to ``workers`` threads; a rejected pose
+        ``principal``), then the roots beyond the slots: extra_q (N, E, n), extra_branch (-1
+        past a pose's last), extra_flags (N, E), extra_errors (N, E, 2) (E = 0 on a table that
+        is not completed); in contiguous slices on up to ``workers`` threads; a rejected pose
         raises InputError (its ``index`` the pose's)."""
         N, B, n = targets.shape[0], BRANCHES, self.dof
+        E = EXTRA_ROOTS if self.completed else 0
         outputs: tuple[NDArray[Any], ...] = (
             np.empty((N, B, n)), np.empty((N, B), np.bool_), np.empty((N, B), np.uint8),
             np.empty((N, B, 2)), np.empty((N, B), np.int64), np.empty((N, WHY_SIZE)),
-            np.empty((N, INFO.size)))
+            np.empty((N, INFO.size)), np.empty((N, E, n)), np.empty((N, E), np.int16),
+            np.empty((N, E), np.uint8), np.empty((N, E, 2)))
 
         def solve(a: int, b: int) -> None:
             self.core.principal(targets[a:b], seeds if seeds.shape[0] == 1 else seeds[a:b],
                                 tolerance, frames, copies, *(array[a:b] for array in outputs))
 
         _in_slices(N, workers, solve)
-        q, ok, flags, errors, totals, _, info = outputs
+        q, ok, flags, errors, totals, _, info, *extra = outputs
         self._raise_rejected(targets, info, first_index)
-        return q, ok, flags, errors, totals, info
+        return (q, ok, flags, errors, totals, info, *extra)
 
     def branches(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                  tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None
@@ -369,13 +428,18 @@ class ClosedFormSolver:
         targets, _ = as_targets(T)
         seeds = self._seeds(q_seed, targets.shape[0])
         frames = self.frames if tcp is None else self.frames_for(tcp)
-        q, ok, flags, errors, _, info = self._principal(targets, seeds, tolerance, frames, False,
-                                                        0)
+        q, ok, flags, errors, _, info, extra_q, extra_branch, extra_flags, extra_errors = \
+            self._principal(targets, seeds, tolerance, frames, False, 0)
         q[~ok] = 0.0
         errors[~ok] = 0.0
+        width = int((extra_branch >= 0).sum(axis=1).max(initial=0))
         return BranchSolutions(q=q, valid=ok, flags=np.where(ok, flags, 0).astype(np.uint8),
                                residuals=errors, branch_labels=self.branch_labels,
-                               dropped=info[:, INFO.dropped].astype(np.int64))
+                               dropped=info[:, INFO.dropped].astype(np.int64),
+                               extra_q=np.ascontiguousarray(extra_q[:, :width]),
+                               extra_branch=np.ascontiguousarray(extra_branch[:, :width]),
+                               extra_flags=np.ascontiguousarray(extra_flags[:, :width]),
+                               extra_residuals=np.ascontiguousarray(extra_errors[:, :width]))
 
     def _raise_rejected(self, targets: NDArray[np.float64], info: NDArray[np.float64],
                         start: int) -> None:
@@ -404,7 +468,7 @@ class ClosedFormSolver:
         targets, _ = as_targets(T)
         frames = self.frames if tcp is None else self.frames_for(tcp)
         if chunk_size is None:
-            per_pose = (self.max_solutions if copies else self.n_branches) * (8 * self.dof + 20)
+            per_pose = (self.max_solutions if copies else self.max_roots) * (8 * self.dof + 20)
             chunk_size = int(min(DEFAULT_CHUNK, max(1024, STREAM_BYTES // per_pose)))
         chunk_size = _check_chunk(chunk_size)
         seeds = self._seeds(q_seed, targets.shape[0])

@@ -94,6 +94,10 @@ class BranchSolver:
         batch = self.principal.solve_batch(T)
         pose, slot = np.nonzero(batch.valid)
         branch = batch.branch[pose, slot]
+        # a refined table's roots beyond the slots follow its slots' roots (their branch may be
+        # one a slot answers): the slot's root, continuous with the ideal model's, stands for it
+        _, first = np.unique(pose * self.n_branches + branch, return_index=True)
+        pose, slot, branch = pose[first], slot[first], branch[first]
         q[pose, branch] = batch.q[pose, slot]
         valid[pose, branch] = True
         valid &= has_copy_within_limits(self.table, q)

@@ -257,6 +257,7 @@ inline void pipeline_branches(const Plan& plan, const TargetFrames& frames, cons
     place_extras(plan, T_at, extras, regular.flags, branches, kBranches, tolerance / plan.lever);
     place_nearer_the_seed(plan, T_at, extras, seed, tolerance / plan.lever, branches);
     seed_root(plan, T_at, seed, tolerance, branches);
+    polish_slots(plan, T_at, tolerance, branches);
   }
   // flags describe the solution returned: wrist and elbow from its joint values, shoulder from
   // the pose (where the two q1 roots meet depends on the pose alone)

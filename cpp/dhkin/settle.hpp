@@ -48,26 +48,30 @@ inline PoseError settle(const Plan& plan, const Frame& target, Joints& values, J
       }
     }
     const double goal = newton::kRefineFraction * tolerance;
-    const bool unpolished = error.position > goal || error.rotation > goal;
-    if (error.within(tolerance) && (unpolished || any(fixed))) {
-      // verified before Newton stopped improving (a monotone descent's budget spent):
-      // polished while it still improves. A seed's member (free joint held) is polished with
-      // every joint free: the exact chain's root near the member where the pose fixes it; on an
-      // exact singular family the held point is already exact and no step gains. `fixed` stays
-      // set: the seed chose this member
-      Joints polished = values;
+    // verified before Newton stopped improving (a monotone descent's budget spent, or the end of
+    // a continuation, which stops at the tolerance): polished while it still improves. A seed's
+    // member (free joint held) is polished with every joint free: the exact chain's root near
+    // the member where the pose fixes it; on an exact singular family the held point is already
+    // exact and no step gains. `fixed` stays set: the seed chose this member
+    const auto polish_verified = [&](Joints& at, PoseError& at_error) {
+      const bool unpolished = at_error.position > goal || at_error.rotation > goal;
+      if (!at_error.within(tolerance) || !(unpolished || any(fixed))) return;
+      Joints polished = at;
       JointMask none{};
       const PoseError polished_error = refine(chain, target, polished, none, tolerance,
                                               {kPolishBudget, newton::kGrowth, 0.0});
       if (std::max(polished_error.position, polished_error.rotation) <
-          std::max(error.position, error.rotation)) {
-        values = polished;
-        error = polished_error;
+          std::max(at_error.position, at_error.rotation)) {
+        at = polished;
+        at_error = polished_error;
       }
-    }
+    };
+    polish_verified(values, error);
     if (!clamped && !error.within(tolerance)) {  // follow the branch from the ideal model
       values = start;
       refine_along(plan.ideal, chain, plan.path, target, values, fixed, tolerance);
+      PoseError followed = check(chain, values.data(), target);
+      polish_verified(values, followed);
     } else if (clamped && !error.within(tolerance)) {
       // a target a hair beyond a fold: its least-squares point may verify
       refine(chain, target, values, fixed, tolerance, {kPolishBudget, newton::kMonotone, 0.0});
@@ -95,6 +99,28 @@ inline PoseError settle(const Plan& plan, const Frame& target, Joints& values, J
     error = check(chain, values.data(), target);
   }
   return error;
+}
+
+// Every verified slot of a refined table polished while Newton still improves it: a slot's root
+// can come from a search that stops at the tolerance (a root placed from a valley, a corrected
+// target, a merge), not only from settle(). A slot whose errors are within the refinement goal
+// (kRefineFraction x tolerance) is left as it is.
+inline void polish_slots(const Plan& plan, const Frame& target, double tolerance,
+                         Branches& branches) {
+  const double goal = newton::kRefineFraction * tolerance;
+  for (int b = 0; b < kBranches; ++b) {
+    const PoseError& error = branches.errors[b];
+    if (!branches.ok[b] || (error.position <= goal && error.rotation <= goal)) continue;
+    Joints polished = branches.q[b];
+    const PoseError polished_error = refine(plan.chain, target, polished, JointMask{}, tolerance,
+                                            {kPolishBudget, newton::kGrowth, 0.0});
+    if (std::max(polished_error.position, polished_error.rotation) <
+        std::max(error.position, error.rotation)) {
+      plan.wrap_revolute(polished);
+      branches.q[b] = polished;
+      branches.errors[b] = check(plan.chain, polished.data(), target);
+    }
+  }
 }
 
 // settle() of `start` copied into `candidate` with every joint free.

@@ -12,17 +12,11 @@
 #include "dhkin/expand.hpp"
 #include "dhkin/pipeline.hpp"
 #include "dhkin/plan.hpp"
+#include "dhkin/row_batch.hpp"
 
 namespace dhkin {
 
-struct RowsAnswer {
-  std::vector<Solution> rows;
-  std::vector<std::int64_t> counts;   // per pose answered
-  std::vector<double> projection;     // per pose answered
-  std::vector<std::int64_t> dropped;  // per pose answered
-  long rejected = -1;                 // the first pose whose status is not usable, or -1
-  int status = 0;                     // its status
-};
+using RowsAnswer = RowBatch<Solution>;
 
 // N poses (4 x 4 row-major, consecutive) with their seeds (kDof values each, `seed_stride` apart:
 // 0 for one seed for all); stops at the first pose whose status is not usable.
@@ -30,19 +24,14 @@ inline RowsAnswer solve_rows(const Plan& plan, const TargetFrames& frames, const
                              std::size_t n, const double* seeds, std::size_t seed_stride,
                              double tolerance, bool copies) {
   RowsAnswer out;
-  out.counts.reserve(n);
-  out.projection.reserve(n);
-  out.dropped.reserve(n);
-  out.rows.reserve(n * kBranches);
+  out.reserve(n, kBranches);
   for (std::size_t i = 0; i < n; ++i) {
-    Joints seed;
-    for (int j = 0; j < kDof; ++j) seed[j] = seeds[i * seed_stride + j];
+    const Joints seed = seed_of(seeds, seed_stride, i);
     Branches branches;
     PoseInfo info;
     solve_pose(plan, frames, T + 16 * i, seed, tolerance, branches, info);
     if (info.status != kUsable) {
-      out.rejected = static_cast<long>(i);
-      out.status = info.status;
+      out.reject(i, info.status);
       return out;
     }
     const long count = expand(plan, frames, T + 16 * i, seed, tolerance, copies, branches,
@@ -50,9 +39,7 @@ inline RowsAnswer solve_rows(const Plan& plan, const TargetFrames& frames, const
                                 out.rows.push_back(solution);
                                 return true;
                               });
-    out.counts.push_back(count);
-    out.projection.push_back(info.projection);
-    out.dropped.push_back(info.dropped);
+    out.answered(count, info.projection, info.dropped);
   }
   return out;
 }

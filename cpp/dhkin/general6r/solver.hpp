@@ -15,6 +15,7 @@
 #include "dhkin/general6r/roots.hpp"
 #include "dhkin/general6r/valley.hpp"
 #include "dhkin/pose.hpp"
+#include "dhkin/row_batch.hpp"
 
 namespace dhkin::general6r {
 
@@ -206,15 +207,9 @@ inline Answer solve(const Solver& solver, const Tip& tip, const double* T, const
   return answer;
 }
 
-// A batch's answers, rows of all poses one after the other.
-struct BatchAnswers {
-  std::vector<Solution> rows;
-  std::vector<std::int64_t> counts;  // rows per pose
-  std::vector<double> projection;
-  std::vector<std::int64_t> dropped;  // starts that did not verify, per pose
-  long rejected = -1;  // the first pose not usable (or -1), and why
-  int status = kUsable;
-};
+// A batch's answers, rows of all poses one after the other (dropped: starts that did not
+// verify, per pose).
+using BatchAnswers = RowBatch<Solution>;
 
 // solve() of N poses (4 x 4 row-major, consecutive) with their seeds (kDof values each,
 // `seed_stride` apart: 0 for one seed for all); stops at the first pose not usable.
@@ -222,23 +217,17 @@ inline BatchAnswers solve_batch(const Solver& solver, const Tip& tip, const doub
                                 std::size_t n, const double* seeds, std::size_t seed_stride,
                                 double tolerance, bool copies) {
   BatchAnswers out;
-  out.counts.reserve(n);
-  out.projection.reserve(n);
-  out.dropped.reserve(n);
-  out.rows.reserve(8 * n);
+  out.reserve(n, 8);
   for (std::size_t i = 0; i < n; ++i) {
-    Joints seed;
-    for (int j = 0; j < kDof; ++j) seed[j] = seeds[i * seed_stride + j];
-    Answer answer = solve(solver, tip, T + 16 * i, seed, tolerance, copies);
+    Answer answer = solve(solver, tip, T + 16 * i, seed_of(seeds, seed_stride, i), tolerance,
+                          copies);
     if (answer.outcome == Outcome::kRejected) {
-      out.rejected = static_cast<long>(i);
-      out.status = answer.status;
+      out.reject(i, answer.status);
       return out;
     }
-    out.counts.push_back(static_cast<std::int64_t>(answer.rows.size()));
-    out.projection.push_back(answer.projection);
-    out.dropped.push_back(answer.failed);
     out.rows.insert(out.rows.end(), answer.rows.begin(), answer.rows.end());
+    out.answered(static_cast<std::int64_t>(answer.rows.size()), answer.projection,
+                 answer.failed);
   }
   return out;
 }

@@ -183,8 +183,8 @@ dhkin::Chain chain_of(const nb::dict& f, const char* name) {
 }
 
 dhkin::Plan make_plan(const nb::dict& f) {
-  check_keys(f, {"family", "refine", "seed_angle", "seed_length", "deviation", "band_angle", "lever",
-                 "free_joints", "geometry", "chain", "ideal", "path", "limits"},
+  check_keys(f, {"family", "refine", "seed_angle", "seed_length", "deviation", "band_angle",
+                 "lever", "free_joints", "geometry", "chain", "ideal", "path", "limits"},
              "plan");
   dhkin::Plan plan;
   const int family = nb::cast<int>(f["family"]);

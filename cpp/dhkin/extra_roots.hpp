@@ -79,6 +79,8 @@ inline void add_exact_roots(const Plan& plan, const TargetFrames& frames, const 
   for (const ExactRoot& root : roots) {
     if (root.sigma <= band || branches.known(plan, root.q)) continue;
     const PoseError error = check(plan.chain, root.q.data(), targets.T_at);
+    // (a full ExtraRoots cannot meet another root: the slots and the extras hold distinct
+    // isolated roots, at most 16 in all)
     if (!error.within(tolerance) || extra.count == ExtraRoots::kCapacity) continue;
     const IdealBranch ideal = ideal_branch_of(plan, frames, root.q, clamp);
     const int k = extra.count++;

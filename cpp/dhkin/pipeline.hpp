@@ -22,6 +22,8 @@
 // pose goes on to solve_branches. On a refined table solve_branches first tries the refined
 // direct path (direct_refined_branches, refined_direct.hpp): a regular pose's eight candidates
 // refined by Newton in lanes; a pose that needs any of the repairs below takes the pipeline.
+// Where the exact chain of a refined table may have more roots than the eight slots hold, the
+// roots beyond them are added after step 3 (add_roots_beyond_slots, extra_roots.hpp).
 //
 // `clamp`: reach conditions violated by at most tolerance x (1 + lever) + twice the model
 // deviation are clamped onto their boundary, polished and verified, not rejected: a pose whose

@@ -33,6 +33,10 @@ JOINT_TOLERANCE = 1e-6
 SINGULAR_BAND = math.sqrt(TOLERANCE)
 SPECIAL = np.array([0.0, math.pi / 2, -math.pi / 2, math.pi])
 REFINED = ("ur5e_calibrated", "kinova_gen3_6dof", "tm5_900")
+#: Arms whose sample sets have roots beyond the slots (the calibrated UR5e's and the Kinova's
+#: wrists are off the ideal model's by 1.7e-3 rad and 0.175 mm; the TM5-900's constants by
+#: rounding, 3e-7 rad, whose roots the slots hold on these sets)
+BEYOND_THE_SLOTS = ("ur5e_calibrated", "kinova_gen3_6dof")
 POSES_PER_SET = 30
 
 
@@ -100,7 +104,8 @@ def test_refined_tables_return_every_isolated_root(name):
         # outside the singular band the seed only picks copies (within it, a member)
         assert same_roots(*answers), f"{name}, q = {q[i].tolist()}: the roots depend on the seed"
         beyond_slots += int((robot.ik_solver.branches(T[i]).extra_branch >= 0).sum())
-    assert beyond_slots > 0, "no pose of the sets has roots beyond the slots"
+    if name in BEYOND_THE_SLOTS:
+        assert beyond_slots > 0, "no pose of the sets has roots beyond the slots"
 
 
 @pytest.mark.parametrize("name", REFINED)
@@ -128,7 +133,8 @@ def test_refined_batches_give_the_single_calls_rows(name):
 
 def test_roots_beyond_the_slots_carry_their_ideal_configuration():
     """Each root beyond the slots is labelled with the branch the ideal model gives its joint
-    values: the ideal model's closed form at the ideal model's own pose of those values returns
+    values: the ideal model's closed form at the ideal model's own pose of those values, seeded
+    with them (at q5 = 0 the ideal wrist is singular and the seed gives its free joint), returns
     them in that branch."""
     robot = dhkin.load("ur5e_calibrated")
     ideal = Robot(robot.ik_solver.fit.ideal)
@@ -140,7 +146,7 @@ def test_roots_beyond_the_slots_carry_their_ideal_configuration():
     assert rows.any()
     values = branches.extra_q[rows]
     labels = branches.extra_branch[rows]
-    own = ideal.ik_solver.branches(ideal.fk(values))
+    own = ideal.ik_solver.branches(ideal.fk(values), values)
     for k in range(len(values)):
         slot = own.q[k, labels[k]]
         assert own.valid[k, labels[k]]

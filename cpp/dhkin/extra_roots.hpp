@@ -23,6 +23,7 @@
 // for a family of solutions, whose member the slots already hold (the seed's).
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -49,7 +50,23 @@ inline IdealBranch ideal_branch_of(const Plan& plan, const TargetFrames& frames,
   }
   Candidates found;
   plan.solve_family(T_ideal, q, 0, clamp, found);
-  IdealBranch out;
+  // where the ideal model is singular at its pose of q (q5 = 0 of a wrist), the free joint is
+  // q's own: the seeded candidates (the family's member through q) stand for those branches
+  int wanted = 0;
+  for (int b = 0; b < kBranches; ++b) wanted |= found.near[b] & kFree;
+  if (wanted != 0) {
+    Candidates seeded;
+    plan.solve_family(T_ideal, q, wanted, clamp, seeded);
+    for (int b = 0; b < kBranches; ++b) {
+      if (seeded.valid[b] && (seeded.near[b] & wanted) != 0) {
+        found.q[b] = seeded.q[b];
+        found.valid[b] = true;
+        found.flags[b] = seeded.flags[b];
+      }
+    }
+  }
+  // a valid candidate first; among invalid ones (clamped at the reach) only when none is
+  std::array<double, kBranches> rank;
   double nearest = INFINITY;
   for (int b = 0; b < kBranches; ++b) {
     double distance = 0.0;
@@ -57,12 +74,17 @@ inline IdealBranch ideal_branch_of(const Plan& plan, const TargetFrames& frames,
       const double d = plan.revolute(j) ? wrap(found.q[b][j] - q[j]) : found.q[b][j] - q[j];
       distance = std::max(distance, std::abs(d));
     }
-    // a valid candidate first; among invalid ones (clamped at the reach) only when none is
-    const double rank = found.valid[b] ? distance : kTwoPi * 4.0 + distance;
-    if (rank < nearest) {
-      nearest = rank;
+    rank[b] = found.valid[b] ? distance : kTwoPi * 4.0 + distance;
+    nearest = std::min(nearest, rank[b]);
+  }
+  // candidates within twice the merge angle of the nearest are one solution (the two wrist
+  // branches of a singular wrist): the first branch stands for them, as in BranchSolutions
+  IdealBranch out;
+  for (int b = 0; b < kBranches; ++b) {
+    if (rank[b] <= nearest + 2.0 * kMergeAngle) {
       out.branch = b;
       out.shoulder = found.flags[b] & kShoulder;
+      break;
     }
   }
   return out;

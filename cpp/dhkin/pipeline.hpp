@@ -237,7 +237,9 @@ inline void pipeline_branches(const Plan& plan, const TargetFrames& frames, cons
   if (plan.refine) {
     // the exact chain's roots along the ideal model's wrist families, where its wrist singular
     // set may lie: within the seed band of the ideal model's, at the ideal candidate or at the
-    // exact root refined from it (the ideal q5 can be far off near the shoulder singularity)
+    // exact root refined from it (the ideal q5 can be far off near the shoulder singularity).
+    // (Kept beside the exact roots of add_roots_beyond_slots: it also finds near-double roots
+    // inside their singular band, which those leave to the slots)
     for (int b = 0; b < kBranches; ++b) {
       const bool in_band = plan.wrist_sine(regular.q[b]) <= plan.seed_angle ||
                            (branches.ok[b] && plan.wrist_sine(branches.q[b]) <= plan.seed_angle);

@@ -151,6 +151,23 @@ def test_a_text_read_again_gives_a_fresh_copy_of_its_data(tmp_path: Path) -> Non
         assert [load_yaml(t)["value"] for t in texts] == list(range(PARSED_TEXTS_KEPT + 10))
 
 
+def test_built_in_tables_stay_kept_while_other_texts_are_read() -> None:
+    """A built-in robot's table, once read, is not parsed again after more than
+    PARSED_TEXTS_KEPT other texts (its own cache); its data is the file's, as a fresh copy."""
+    from dhkin import table_yaml
+
+    path = resolve_table_path("ur5")
+    load_table(path)
+    for k in range(PARSED_TEXTS_KEPT + 10):
+        load_yaml(f"kept_test: {k}\n")
+    before = table_yaml._parsed_builtin.cache_info()
+    again = load_table(path)
+    after = table_yaml._parsed_builtin.cache_info()
+    assert (after.hits, after.misses) == (before.hits + 1, before.misses)
+    fresh = read_back(path.read_text(encoding="utf-8"))
+    assert again.name == fresh.name and again.joints == fresh.joints
+
+
 def test_yaml_1_2_numbers_and_text(tmp_path: Path) -> None:
     """1e-1 is a number (YAML 1.1 read it as text); 6:00 is text (1.1: 360, base 60)."""
     path = tmp_path / "t.yaml"

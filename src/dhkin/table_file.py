@@ -19,6 +19,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
+from dhkin.builtin import builtin_dir
 from dhkin.dh import (
     ANGLE_UNITS,
     CONVENTIONS,
@@ -71,7 +72,8 @@ def load_table(path: str | Path) -> DHTable:
     """Read and validate a DH table file (YAML 1.2, :mod:`dhkin.table_yaml`). Raises
     :class:`DHError` naming the file and the field."""
     file = Path(path)
-    data = load_yaml(read_table_text(file), source=str(file))
+    data = load_yaml(read_table_text(file), source=str(file),
+                     builtin=file.resolve().parent == builtin_dir())
     return parse_table(data, source=str(file), path=file)
 
 

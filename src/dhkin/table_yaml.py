@@ -121,25 +121,28 @@ def read_table_text(path: str | Path) -> str:
                       expected="UTF-8 text") from exc
 
 
-#: Texts whose data :func:`load_yaml` keeps (the most recently read): every built-in robot's
-#: table (73) with as many again of a session's own. Each entry is a text of at most
-#: :data:`MAX_TABLE_BYTES` and its data.
+#: Texts whose data :func:`load_yaml` keeps (the most recently read), in each of two caches: the
+#: built-in robots' table files (73; ``builtin=True``, from :func:`dhkin.table_file.load_table`),
+#: and every other text. Apart, a session that reads many texts of its own (generated, written
+#: back, fuzzed: the test suite reads ~2400 distinct ones per worker) does not push the built-in
+#: tables out and parse them again (1390 such parses in one worker's run of the suite, ~12 ms
+#: each). Each entry is a text of at most :data:`MAX_TABLE_BYTES` and its data.
 PARSED_TEXTS_KEPT = 146
 
 
-def load_yaml(text: str, source: str = "<table>") -> Any:
+def load_yaml(text: str, source: str = "<table>", builtin: bool = False) -> Any:
     """The data of YAML ``text`` (one document, plain data only), within the limits of this
     module; any fault gives a one-line DHError that names ``source`` and the field or line.
 
     The data of a text read before is a copy of what its first read gave (the same text gives
     the same data: the parse is pure), without parsing it again: ruamel's pure-Python parser
-    costs ~12 ms a table, a load of a built-in robot nearly all of it. Faults are not kept:
-    a faulty text is parsed, and its error raised, each time."""
-    return copy.deepcopy(_parsed(text, source))
+    costs ~12 ms a table, a load of a built-in robot nearly all of it. ``builtin``: the text of
+    a built-in robot's table file, kept apart from other texts (:data:`PARSED_TEXTS_KEPT`).
+    Faults are not kept: a faulty text is parsed, and its error raised, each time."""
+    return copy.deepcopy((_parsed_builtin if builtin else _parsed)(text, source))
 
 
-@functools.lru_cache(maxsize=PARSED_TEXTS_KEPT)
-def _parsed(text: str, source: str) -> Any:
+def _parse(text: str, source: str) -> Any:
     """:func:`load_yaml` of a text not kept: the checks and the parse."""
     yaml = YAML(typ="safe", pure=True)
     yaml.version = (1, 2)
@@ -155,6 +158,11 @@ def _parsed(text: str, source: str) -> Any:
         return yaml.constructor.construct_document(node)
     except (YAMLError, ValueError, TypeError, OverflowError) as exc:  # e.g. a key twice as 1, 01
         raise _syntax_error(exc, text, source) from exc
+
+
+#: The two caches of :data:`PARSED_TEXTS_KEPT` texts each (see :func:`load_yaml`).
+_parsed = functools.lru_cache(maxsize=PARSED_TEXTS_KEPT)(_parse)
+_parsed_builtin = functools.lru_cache(maxsize=PARSED_TEXTS_KEPT)(_parse)
 
 
 def _check_events(events: Iterator[Event], source: str) -> None:

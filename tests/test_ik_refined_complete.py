@@ -2,8 +2,8 @@
 
 Near the ideal model's singular sets the exact chain of a refined table (a calibrated UR5e, the
 TM5-900's rounded constants, the Kinova Gen3's offsets) can have more isolated roots than the
-eight branch slots hold. Here, on poses made by Pinocchio on the generated URDF at q5 = 0, at
-small |q5| and at special angles: every isolated root that a multistart on Pinocchio finds
+eight branch slots hold. Here, on poses made by Pinocchio on the vendor's URDF (robots/vendor:
+the table was fitted to it) at q5 = 0, at small |q5| and at special angles: every isolated root that a multistart on Pinocchio finds
 (dhkin.validation.multistart.RootReference, its roots verified on Pinocchio) is returned unless
 it lies in the singular band (sigma_min(J) < sqrt(tolerance), where a member of the near-singular
 family stands for it), unseeded and seeded; the roots returned outside the band are the same
@@ -23,6 +23,8 @@ from dhkin.robot import Robot
 from dhkin.transforms import pose_error
 from dhkin.validation.multistart import ISOLATED, RootReference
 from dhkin.validation.references import target_model
+from dhkin.vendors import VENDOR_REFERENCES
+from tests.conftest import REFERENCE_URDFS
 
 TOLERANCE = 1e-9
 #: A root is found when a returned row is within this of it on every joint (mod 2pi): the
@@ -72,7 +74,8 @@ def same_roots(a: np.ndarray, b: np.ndarray) -> bool:
 def test_refined_tables_return_every_isolated_root(name):
     robot = dhkin.load(name)
     assert robot.ik_solver.completed
-    model = target_model(robot, "exact")  # Pinocchio on the generated URDF
+    listed = VENDOR_REFERENCES[name]  # Pinocchio on the vendor's URDF
+    model = target_model(robot, REFERENCE_URDFS / listed.file, base=listed.base, tip=listed.tip)
     reference = RootReference(robot, model, starts=2000)
     rng = np.random.default_rng(2511)
     q = sample_sets(robot, rng)

@@ -3,8 +3,9 @@
 Near the ideal model's singular sets the exact chain of a refined table (a calibrated UR5e, the
 TM5-900's rounded constants, the Kinova Gen3's offsets) can have more isolated roots than the
 eight branch slots hold. Here, on poses made by Pinocchio on the vendor's URDF (robots/vendor:
-the table was fitted to it) at q5 = 0, at small |q5| and at special angles: every isolated root that a multistart on Pinocchio finds
-(dhkin.validation.multistart.RootReference, its roots verified on Pinocchio) is returned unless
+the table was fitted to it) at q5 = 0, at small |q5| and at special angles: every isolated root
+that a multistart on Pinocchio finds (dhkin.validation.multistart.RootReference, its roots
+verified on Pinocchio) is returned unless
 it lies in the singular band (sigma_min(J) < sqrt(tolerance), where a member of the near-singular
 family stands for it), unseeded and seeded; the roots returned outside the band are the same
 with and without the seed; every returned row verifies on Pinocchio; the batch gives the single

@@ -15,6 +15,23 @@ inline bool any(const JointMask& mask) {
   return false;
 }
 
+// q (verified, with errors `error`) polished by Newton with every joint free while it still
+// improves (kPolishBudget chain evaluations at most), kept only where the errors shrink; whether
+// they did.
+inline bool polish_free(const Chain& chain, const Frame& target, double tolerance, Joints& q,
+                   PoseError& error) {
+  Joints polished = q;
+  const PoseError polished_error = refine(chain, target, polished, JointMask{}, tolerance,
+                                          {kPolishBudget, newton::kGrowth, 0.0});
+  if (!(std::max(polished_error.position, polished_error.rotation) <
+        std::max(error.position, error.rotation))) {
+    return false;
+  }
+  q = polished;
+  error = polished_error;
+  return true;
+}
+
 // Wrap a candidate's revolute values, refine it on the exact chain if the plan says so (joints
 // marked `fixed` keep their value; a candidate that is an exact solution of the ideal model, not
 // `clamped`, is followed by continuation where Newton fails), or polish it by Newton where an
@@ -55,15 +72,8 @@ inline PoseError settle(const Plan& plan, const Frame& target, Joints& values, J
     // exact and no step gains. `fixed` stays set: the seed chose this member
     const auto polish_verified = [&](Joints& at, PoseError& at_error) {
       const bool unpolished = at_error.position > goal || at_error.rotation > goal;
-      if (!at_error.within(tolerance) || !(unpolished || any(fixed))) return;
-      Joints polished = at;
-      JointMask none{};
-      const PoseError polished_error = refine(chain, target, polished, none, tolerance,
-                                              {kPolishBudget, newton::kGrowth, 0.0});
-      if (std::max(polished_error.position, polished_error.rotation) <
-          std::max(at_error.position, at_error.rotation)) {
-        at = polished;
-        at_error = polished_error;
+      if (at_error.within(tolerance) && (unpolished || any(fixed))) {
+        polish_free(chain, target, tolerance, at, at_error);
       }
     };
     polish_verified(values, error);
@@ -109,16 +119,13 @@ inline void polish_slots(const Plan& plan, const Frame& target, double tolerance
                          Branches& branches) {
   const double goal = newton::kRefineFraction * tolerance;
   for (int b = 0; b < kBranches; ++b) {
-    const PoseError& error = branches.errors[b];
+    PoseError error = branches.errors[b];
     if (!branches.ok[b] || (error.position <= goal && error.rotation <= goal)) continue;
-    Joints polished = branches.q[b];
-    const PoseError polished_error = refine(plan.chain, target, polished, JointMask{}, tolerance,
-                                            {kPolishBudget, newton::kGrowth, 0.0});
-    if (std::max(polished_error.position, polished_error.rotation) <
-        std::max(error.position, error.rotation)) {
-      plan.wrap_revolute(polished);
-      branches.q[b] = polished;
-      branches.errors[b] = check(plan.chain, polished.data(), target);
+    Joints q = branches.q[b];
+    if (polish_free(plan.chain, target, tolerance, q, error)) {
+      plan.wrap_revolute(q);
+      branches.q[b] = q;
+      branches.errors[b] = check(plan.chain, q.data(), target);
     }
   }
 }

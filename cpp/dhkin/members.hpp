@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "dhkin/brent.hpp"
 #include "dhkin/golden.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/settle.hpp"
@@ -17,9 +18,8 @@ namespace members {
 
 // The nearest member of a one-parameter family (q1 or q2 free): a grid over the whole turn (this
 // half-width, this step, rad) around the seed's value of the free joint: the other joints follow
-// the free one, so the nearest member can be far from the seed's value of it; then golden-section
-// search to kPrecision within a step of the best grid point (the distance has kinks: no
-// derivatives).
+// the free one, so the nearest member can be far from the seed's value of it; then Brent's search
+// to kPrecision within a step of the best grid point (the distance has kinks: no derivatives).
 constexpr double kHalfWidth = kPi;
 constexpr double kStep = 0.05;
 constexpr int kGrid = 63;  // ceil(kHalfWidth / kStep)
@@ -62,9 +62,10 @@ inline int nearest_member(const Plan& plan, const Frame& T, const Joints& seed, 
     if (value < best) best_t = t, best = value;
   }
   if (best == INFINITY) return -1;
-  const double middle = golden_section(best_t - kStep, best_t + kStep, kPrecision, distance,
-                                       [](double left, double right) { return left <= right; });
-  if (distance(middle) > best) distance(best_t);
+  // the best point scored, never worse than the grid's
+  const double nearest = brent_minimum(best_t - kStep, best_t + kStep, kPrecision, best_t, best,
+                                       distance);
+  distance(nearest);  // `found`: the nearest member's candidates
   candidate = found.q[b];
   return found.flags[b];
 }

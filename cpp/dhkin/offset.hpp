@@ -24,7 +24,7 @@
 #include "dhkin/bands.hpp"
 #include "dhkin/family.hpp"
 #include "dhkin/frame.hpp"
-#include "dhkin/golden.hpp"
+#include "dhkin/brent.hpp"
 
 namespace dhkin {
 
@@ -289,8 +289,8 @@ inline Member member(const OffsetGeometry& g, const Frame& T_home, const SinCos&
 }
 // Nearest-member search over q6: a grid of this half-width and step (rad) around the seed's q6
 // (where q6 would leave axis 4 out of reach it is moved onto the reach boundary, so far members
-// are found at the grid's edge), then golden-section search to kMemberPrecision within a step of
-// the best grid point. The distance is not smooth (square roots near a stretched or folded elbow,
+// are found at the grid's edge), then Brent's search to kMemberPrecision within a step of the
+// best grid point. The distance is not smooth (square roots near a stretched or folded elbow,
 // the move onto the boundary): no derivatives are used.
 constexpr double kMemberHalfWidth = kPi;
 constexpr double kMemberStep = 0.05;
@@ -377,13 +377,10 @@ inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const S
     const Member m = member(g, T_home, t1, q5, t, reach_side, seed, request, e);
     return m.valid ? m.distance : std::numeric_limits<double>::infinity();
   };
-  const double middle =
-      golden_section(best_t - kMemberStep, best_t + kMemberStep, kMemberPrecision, value,
-                     [](double left, double right) { return left <= right; });
-  found = member(g, T_home, t1, q5, middle, reach_side, seed, request, e);
-  if (!found.valid || found.distance > best) {  // the grid point is better (a kink inside)
-    found = member(g, T_home, t1, q5, best_t, reach_side, seed, request, e);
-  }
+  // the best point scored, never worse than the grid's
+  const double nearest = brent_minimum(best_t - kMemberStep, best_t + kMemberStep,
+                                       kMemberPrecision, best_t, best, value);
+  found = member(g, T_home, t1, q5, nearest, reach_side, seed, request, e);
   return true;
 }
 

@@ -160,6 +160,15 @@ nb::tuple rows_arrays(const std::vector<g6::Solution>& rows) {
                         owned(std::move(singular), {k}));
 }
 
+// A batch's answers as arrays: (q (R, 6), errors (R, 2), singular (R,)), counts (N,),
+// projection (N,), dropped (N,), first rejected pose or -1, its status.
+nb::tuple batch_arrays(g6::BatchAnswers&& out) {
+  const std::size_t answered = out.counts.size();
+  return nb::make_tuple(rows_arrays(out.rows), owned(std::move(out.counts), {answered}),
+                        owned(std::move(out.projection), {answered}),
+                        owned(std::move(out.dropped), {answered}), out.rejected, out.status);
+}
+
 class General6R {
  public:
   General6R(const nb::dict& fields, const nb::list& others)
@@ -237,26 +246,25 @@ class General6R {
                           rows_arrays(answer.rows));
   }
 
-  // N poses (N, 4, 4) with seeds (1 or N, 6): (q (R, 6), errors (R, 2), singular (R,),
-  // counts (N,), projection (N,), dropped (N,), first rejected pose or -1, its status).
-  nb::tuple solve_batch(Input<double, nb::shape<-1, 4, 4>> T,
-                        Input<double, nb::shape<-1, kDof>> seeds,
-                        double tolerance, bool copies, const nb::object& tcp) const {
-    const std::size_t n = T.shape(0);
-    if (seeds.shape(0) != 1 && seeds.shape(0) != n) {
-      throw std::invalid_argument("seeds: expected 1 or N rows");
-    }
-    const std::size_t stride = seeds.shape(0) == 1 ? 0 : kDof;
+  // N poses (N, 4, 4) for each of S seed sets (S, 1 or N, 6), each pose's roots found once: a
+  // list of S tuples (batch_arrays), the answer of each seed set.
+  nb::list solve_batch_seeds(Input<double, nb::shape<-1, 4, 4>> T,
+                             Input<double, nb::shape<-1, -1, kDof>> seeds, double tolerance,
+                             bool copies, const nb::object& tcp) const {
+    const std::size_t n = T.shape(0), rows = seeds.shape(1);
+    if (rows != 1 && rows != n) throw std::invalid_argument("seeds: expected 1 or N rows per set");
+    const std::size_t stride = rows == 1 ? 0 : kDof;
+    std::vector<const double*> sets;
+    for (std::size_t s = 0; s < seeds.shape(0); ++s) sets.push_back(seeds.data() + s * rows * kDof);
     const g6::Tip at = tip(tcp);
-    g6::BatchAnswers out;
+    std::vector<g6::BatchAnswers> out;
     {
       nb::gil_scoped_release release;
-      out = g6::solve_batch(solver_, at, T.data(), n, seeds.data(), stride, tolerance, copies);
+      out = g6::solve_batch_seeds(solver_, at, T.data(), n, sets, stride, tolerance, copies);
     }
-    const std::size_t answered = out.counts.size();
-    return nb::make_tuple(rows_arrays(out.rows), owned(std::move(out.counts), {answered}),
-                          owned(std::move(out.projection), {answered}),
-                          owned(std::move(out.dropped), {answered}), out.rejected, out.status);
+    nb::list answers;
+    for (g6::BatchAnswers& answer : out) answers.append(batch_arrays(std::move(answer)));
+    return answers;
   }
 
   const g6::Solver& solver() const { return solver_; }
@@ -314,8 +322,8 @@ void bind_general6r(nb::module_& m) {
       .def("smallest_singular", &General6R::smallest_singular, "q"_a)
       .def("solve", &General6R::solve, "T"_a, "seed"_a, "tolerance"_a, "copies"_a,
            "tcp"_a = nb::none())
-      .def("solve_batch", &General6R::solve_batch, "T"_a, "seeds"_a, "tolerance"_a, "copies"_a,
-           "tcp"_a = nb::none());
+      .def("solve_batch_seeds", &General6R::solve_batch_seeds, "T"_a, "seeds"_a, "tolerance"_a,
+           "copies"_a, "tcp"_a = nb::none());
   m.def(
       "general6r_multistart",
       [](Input<double, nb::shape<kDof, 4, 4>> before, Input<double, nb::shape<kDof>> direction,

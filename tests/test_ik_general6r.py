@@ -521,6 +521,47 @@ def test_batch_is_the_single_calls_in_the_core() -> None:
         robot.ik_batch(bad)
 
 
+def test_several_seed_sets_share_each_poses_roots() -> None:
+    """solve_batch_seeds finds each pose's roots once and answers every seed set from them:
+    each set's rows, flags, residuals and counts are those of one solve_one per pose with that
+    seed (unseeded, the sampled q, q moved by up to 0.05 rad, one seed for all), bit for bit,
+    on HC10 poses at special angles (curves of solutions, where the seed picks each member and
+    the members differ between the sets) and random ones; every copy too; a bad pose raises
+    naming its index."""
+    from dhkin.errors import InputError
+    from dhkin.ik.result import FLAG_SETS
+
+    robot = dhkin.load("motoman_hc10")
+    solver = robot.general_solver
+    assert solver is not None
+    rng = np.random.default_rng(2611)
+    special = np.radians(rng.choice([-180.0, -90.0, 0.0, 90.0, 180.0], size=(16, 6)))
+    lower, upper = np.maximum(robot.table.lower, -math.pi), np.minimum(robot.table.upper, math.pi)
+    Q = np.concatenate([special, rng.uniform(lower, upper, size=(8, 6))])
+    T = robot.reference().fk(Q)
+    sets = [None, Q, Q + rng.uniform(-0.05, 0.05, size=Q.shape), Q[1]]
+    members_differ = False
+    for copies in (False, True):
+        answers = solver.solve_batch_seeds(T, sets, copies=copies, workers=1)
+        assert len(answers) == len(sets)
+        for seeds, answer in zip(sets, answers, strict=True):
+            for k in range(len(T)):
+                seed = None if seeds is None else (seeds if seeds.ndim == 1 else seeds[k])
+                one = solver.solve_one(T[k], seed, copies=copies)
+                valid = answer.valid[k]
+                assert np.array_equal(answer.q[k][valid], one.q)
+                assert np.array_equal(answer.residuals[k][valid], one.residuals)
+                assert tuple(FLAG_SETS[b] for b in answer.flags[k][valid].tolist()) == one.flags
+                assert answer.dropped[k] == one.dropped
+        unseeded, seeded = answers[0], answers[2]
+        members_differ = members_differ or not np.array_equal(unseeded.q, seeded.q)
+    assert members_differ  # the seeds chose: the test compares answers that differ
+    bad = T[:5].copy()
+    bad[3, 0, 0] = np.nan
+    with pytest.raises(InputError, match=r"T\[3\]"):
+        solver.solve_batch_seeds(bad, [None, Q[:5]])
+
+
 #: A regular root of the tilted UR5 at q5 = 0 (sigma_min 0.03; check_general6r's q5 sample 812)
 #: that the damped Newton left 5.7e-13 m off: its polishing stopped at a step still damped after
 #: rejections on the way, which gained less than twofold (docs/general6r.md, "Speed, third pass").

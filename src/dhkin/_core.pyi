@@ -120,12 +120,12 @@ class General6R:
               copies: bool, tcp: NDArray[np.float64] | None = None
               ) -> tuple[int, int, float, float, int, int,
                          tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.uint8]]]: ...
-    def solve_batch(self, T: NDArray[np.float64], seeds: NDArray[np.float64], tolerance: float,
-                    copies: bool, tcp: NDArray[np.float64] | None = None
-                    ) -> tuple[tuple[NDArray[np.float64], NDArray[np.float64],
-                                     NDArray[np.uint8]],
-                               NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], int,
-                               int]: ...
+    def solve_batch_seeds(self, T: NDArray[np.float64], seeds: NDArray[np.float64],
+                          tolerance: float, copies: bool, tcp: NDArray[np.float64] | None = None
+                          ) -> list[tuple[tuple[NDArray[np.float64], NDArray[np.float64],
+                                                NDArray[np.uint8]],
+                                          NDArray[np.int64], NDArray[np.float64],
+                                          NDArray[np.int64], int, int]]: ...
 
 def general6r_multistart(before: NDArray[np.float64], direction: NDArray[np.float64],
                          offset: NDArray[np.float64], tail: NDArray[np.float64],

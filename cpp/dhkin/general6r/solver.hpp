@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "dhkin/general6r/answer.hpp"
@@ -161,33 +162,54 @@ inline int settled_roots(const Solver& solver, const Tip& tip, const Frame& T_dh
   return failed;
 }
 
-// Every solution of the pose T (4 x 4 row-major) within the joint limits: per root its in-limit
-// 2pi copy nearest `seed` (zeros: no seed), or every copy with `copies`. The roots do not depend
-// on the seed: it only chooses each root's copy and, on a curve of solutions, its member.
-inline Answer solve(const Solver& solver, const Tip& tip, const double* T, const Joints& seed,
-                    double tolerance, bool copies) {
-  Answer answer;
+// What the answers of a pose share whatever their seed: its usability, projection and distance,
+// and its verified roots (before any seed moves a singular one along its curve).
+struct PoseRoots {
+  Answer answer;          // outcome, status, projection, distance, failed (no rows yet)
+  Frame tip_target;       // the tip's target, DH frame 0 -> the tip
+  double verification = 0.0;
+  bool solved = false;    // roots were sought (the pose is usable and within reach)
+  std::vector<Root> roots;
+};
+
+// The roots of the pose T (4 x 4 row-major) at `tolerance`: the part of solve() that does not
+// depend on the seed.
+inline PoseRoots pose_roots(const Solver& solver, const Tip& tip, const double* T,
+                            double tolerance) {
+  PoseRoots out;
+  Answer& answer = out.answer;
   answer.status = pose_status(T);
   if (answer.status != kUsable) {
     answer.outcome = Outcome::kRejected;
-    return answer;
+    return out;
   }
   const Frame target = projected_frame(T, answer.projection);
-  const Frame tip_target = solver.base_inverse * target;
-  const Frame T_dh = tip_target * tip.tool_inverse;
+  out.tip_target = solver.base_inverse * target;
+  const Frame T_dh = out.tip_target * tip.tool_inverse;
   answer.distance = reach_distance(T_dh);
   if (!(answer.distance <= solver.reach(tolerance, tip))) {
     answer.outcome = Outcome::kOutOfReach;
-    return answer;
+    return out;
   }
-  const double verification = verification_tolerance(tolerance, tip.lever);
+  out.verification = verification_tolerance(tolerance, tip.lever);
+  answer.failed = settled_roots(solver, tip, T_dh, out.tip_target, out.verification, out.roots);
+  out.solved = true;
+  return out;
+}
+
+// The answer of a pose from its roots (pose_roots, taken by value: the seed moves singular roots
+// along their curves) for one seed: per root its in-limit 2pi copy nearest `seed` (zeros: no
+// seed), or every copy with `copies`.
+inline Answer answer_for_seed(const Solver& solver, const Tip& tip, PoseRoots pose,
+                              const Joints& seed, double tolerance, bool copies) {
+  Answer answer = pose.answer;
+  if (!pose.solved) return answer;
+  const double verification = pose.verification;
   const double band = singular_band(verification);
-  std::vector<Root> roots;
-  answer.failed = settled_roots(solver, tip, T_dh, tip_target, verification, roots);
+  const Frame& tip_target = pose.tip_target;
+  std::vector<Root>& roots = pose.roots;
   const double slack = tolerance / tip.lever;
-  bool singular = false;
-  for (const Root& root : roots) singular = singular || root.sigma <= band;
-  if (singular) {
+  if (any_singular(roots, band)) {
     seed_members(tip.chain, tip_target, seed, solver.limits, slack, verification, tip.lever,
                  band, roots);
   }
@@ -207,27 +229,43 @@ inline Answer solve(const Solver& solver, const Tip& tip, const double* T, const
   return answer;
 }
 
+// Every solution of the pose T (4 x 4 row-major) within the joint limits: per root its in-limit
+// 2pi copy nearest `seed` (zeros: no seed), or every copy with `copies`. The roots do not depend
+// on the seed: it only chooses each root's copy and, on a curve of solutions, its member.
+inline Answer solve(const Solver& solver, const Tip& tip, const double* T, const Joints& seed,
+                    double tolerance, bool copies) {
+  return answer_for_seed(solver, tip, pose_roots(solver, tip, T, tolerance), seed, tolerance,
+                         copies);
+}
+
 // A batch's answers, rows of all poses one after the other (dropped: starts that did not
 // verify, per pose).
 using BatchAnswers = RowBatch<Solution>;
 
-// solve() of N poses (4 x 4 row-major, consecutive) with their seeds (kDof values each,
-// `seed_stride` apart: 0 for one seed for all); stops at the first pose not usable.
-inline BatchAnswers solve_batch(const Solver& solver, const Tip& tip, const double* T,
-                                std::size_t n, const double* seeds, std::size_t seed_stride,
-                                double tolerance, bool copies) {
-  BatchAnswers out;
-  out.reserve(n, 8);
+// solve() of N poses (4 x 4 row-major, consecutive) for each of several seed sets (seeds[s]:
+// kDof values per pose, `seed_stride` apart: 0 for one seed for all), each pose's roots found
+// once and shared by its answers (they do not depend on the seed): answer s is, row for row,
+// solve()'s with seed set s. Every set stops at the first pose not usable.
+inline std::vector<BatchAnswers> solve_batch_seeds(const Solver& solver, const Tip& tip,
+                                                   const double* T, std::size_t n,
+                                                   const std::vector<const double*>& seeds,
+                                                   std::size_t seed_stride, double tolerance,
+                                                   bool copies) {
+  std::vector<BatchAnswers> out(seeds.size());
+  for (BatchAnswers& answers : out) answers.reserve(n, 8);
   for (std::size_t i = 0; i < n; ++i) {
-    Answer answer = solve(solver, tip, T + 16 * i, seed_of(seeds, seed_stride, i), tolerance,
-                          copies);
-    if (answer.outcome == Outcome::kRejected) {
-      out.reject(i, answer.status);
+    const PoseRoots pose = pose_roots(solver, tip, T + 16 * i, tolerance);
+    if (pose.answer.outcome == Outcome::kRejected) {
+      for (BatchAnswers& answers : out) answers.reject(i, pose.answer.status);
       return out;
     }
-    out.rows.insert(out.rows.end(), answer.rows.begin(), answer.rows.end());
-    out.answered(static_cast<std::int64_t>(answer.rows.size()), answer.projection,
-                 answer.failed);
+    for (std::size_t s = 0; s < seeds.size(); ++s) {
+      const Answer answer = answer_for_seed(solver, tip, pose, seed_of(seeds[s], seed_stride, i),
+                                            tolerance, copies);
+      out[s].rows.insert(out[s].rows.end(), answer.rows.begin(), answer.rows.end());
+      out[s].answered(static_cast<std::int64_t>(answer.rows.size()), answer.projection,
+                      answer.failed);
+    }
   }
   return out;
 }

@@ -302,6 +302,18 @@ class General6RSolver:
         among ``workers`` threads (default: the CPUs this process may use; each pose is solved
         alone, so the answer does not depend on them). ``branch`` is 0 for every solution (the
         general solver has one branch label set, empty: its roots have no family labels)."""
+        return self.solve_batch_seeds(T, [q_seed], tolerance, tcp, copies, chunk_size,
+                                      workers)[0]
+
+    def solve_batch_seeds(self, T: ArrayLike, q_seeds: Sequence[ArrayLike | None],
+                          tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                          copies: bool = False, chunk_size: int = 65536,
+                          workers: int | None = None) -> list[IKBatch]:
+        """:meth:`solve_batch` of the same poses once per seed set of ``q_seeds`` (each None,
+        (6,) or (N, 6)), each pose's roots found once: answer s equals
+        ``solve_batch(T, q_seeds[s], ...)`` row for row, since the roots do not depend on the
+        seed (it chooses copies and members only). For answers of one pose under several seeds
+        (a validation's continuity check) at the cost of one."""
         from dhkin.ik.inputs import _check_chunk
 
         tolerance = check_tolerance(tolerance)
@@ -310,20 +322,28 @@ class General6RSolver:
         workers = check_workers(workers)
         targets, _ = as_targets(T)
         n_poses = targets.shape[0]
-        seeds = self._seeds(q_seed, n_poses)
+        if not q_seeds:
+            raise InputError("q_seeds: expected at least one seed set", field="q_seeds")
+        seed_sets = [self._seeds(q_seed, n_poses) for q_seed in q_seeds]
+        per_pose = any(seeds.shape[0] != 1 for seeds in seed_sets)
+        # (S, 1 or N, 6): one seed broadcast to every pose where another set has one per pose
+        seeds = np.ascontiguousarray(np.stack([
+            np.broadcast_to(s, (n_poses, 6)) if per_pose else s for s in seed_sets]))
         frame = self._tcp(tcp)
-        parts: dict[int, tuple[Any, ...]] = {}
+        parts: dict[int, list[tuple[Any, ...]]] = {}
         for start in range(0, n_poses, chunk_size):
             stop = min(start + chunk_size, n_poses)
 
             def solve(a: int, b: int, start: int = start) -> None:
                 first, last = start + a, start + b
-                part = seeds if seeds.shape[0] == 1 else seeds[first:last]
-                parts[first] = self.core.solve_batch(targets[first:last], part, tolerance,
-                                                     copies, frame)
+                part = seeds if seeds.shape[1] == 1 else seeds[:, first:last]
+                parts[first] = self.core.solve_batch_seeds(
+                    targets[first:last], np.ascontiguousarray(part), tolerance, copies, frame)
 
             _in_slices(stop - start, workers, solve)
-        return self._pack([parts[first] for first in sorted(parts)], targets, sorted(parts))
+        firsts = sorted(parts)
+        return [self._pack([parts[first][s] for first in firsts], targets, firsts)
+                for s in range(len(seed_sets))]
 
     def _pack(self, parts: list[tuple[Any, ...]], targets: NDArray[np.float64],
               firsts: list[int]) -> IKBatch:

@@ -30,6 +30,9 @@ child process. What changes is how the work is done, not what is checked:
 * **Continuity.** The samples of the singular sets that succeeded are solved again in one batch
   with their perturbed seeds; the nearest solution to each seed is found on arrays, and any
   sample not cleared goes through :func:`~dhkin.validation.sample_checks.check_continuity`.
+  For an arm the general 6R solver answers, both batches come from one search for each pose's
+  roots (:meth:`~dhkin.ik.general6r.General6RSolver.solve_batch_seeds`: its roots do not depend
+  on the seed, and each seed set's answer equals its own ``ik_batch_detailed``, row for row).
 """
 
 from __future__ import annotations
@@ -51,18 +54,30 @@ from dhkin.validation.tally import Tally
 
 
 class Answers:
-    """The solutions of N poses from one batch, as flat rows: ``rows`` (M, dof) in pose order,
-    ``owner`` (M,) the pose of each row, ``starts`` (N + 1,) where each pose's rows begin.
-    ``seeds``: one per pose, or None (unseeded)."""
+    """The solutions of N poses from one batch (``q`` (N, m, dof) and ``valid`` (N, m), as
+    :class:`~dhkin.ik.result.IKBatch` holds them), as flat rows: ``rows`` (M, dof) in pose
+    order, ``owner`` (M,) the pose of each row, ``starts`` (N + 1,) where each pose's rows
+    begin."""
 
-    def __init__(self, robot: Arm, targets: NDArray[np.float64],
-                 seeds: NDArray[np.float64] | None) -> None:
-        batch = robot.ik_batch_detailed(targets, q_seed=seeds)
-        self.rows: NDArray[np.float64] = batch.q[batch.valid]
-        self.owner: NDArray[np.int64] = np.nonzero(batch.valid)[0]
-        counts = batch.valid.sum(axis=1)
+    def __init__(self, q: NDArray[np.float64], valid: NDArray[np.bool_]) -> None:
+        self.q, self.valid = q, valid
+        self.rows: NDArray[np.float64] = q[valid]
+        self.owner: NDArray[np.int64] = np.nonzero(valid)[0]
+        counts = valid.sum(axis=1)
         self.counts: NDArray[np.int64] = counts
         self.starts: NDArray[np.int64] = np.concatenate(([0], np.cumsum(counts)))
+
+    @classmethod
+    def solve(cls, robot: Arm, targets: NDArray[np.float64],
+              seeds: NDArray[np.float64] | None) -> Answers:
+        """``robot.ik_batch_detailed(targets, q_seed=seeds)``'s answers (``seeds``: one per
+        pose, or None: unseeded)."""
+        batch = robot.ik_batch_detailed(targets, q_seed=seeds)
+        return cls(batch.q, batch.valid)
+
+    def of_poses(self, poses: NDArray[np.int64]) -> Answers:
+        """The answers of the poses ``poses`` (indices), in that order."""
+        return Answers(self.q[poses], self.valid[poses])
 
     def of(self, k: int) -> NDArray[np.float64]:
         """The solutions of pose k, (count, dof)."""
@@ -108,8 +123,10 @@ def check_all_batched(robot: Arm, model: TargetModel, q: NDArray[np.float64], se
     raises: the caller then runs pose by pose. ``reference``: the multistart reference of a
     general 6R arm, whose IK is then called unseeded and checked against it."""
     unseeded = reference is not None
+    in_sets = np.array([s in CONTINUITY_SETS for s in sets], dtype=bool)
+    seedable = in_sets & np.all(np.isfinite(perturbed), axis=1)
     try:
-        first = Answers(robot, targets, None if unseeded else q)
+        first, continued = _answers(robot, targets, None if unseeded else q, perturbed, seedable)
     except DhkinError:
         return False
     allowed = tolerance + model.deviation
@@ -141,12 +158,12 @@ def check_all_batched(robot: Arm, model: TargetModel, q: NDArray[np.float64], se
             outcome[k], detail[k], missing[k] = check_reference(
                 model, reference, targets[k], first.of(k), tolerance, joint_tolerance)
         succeeded = outcome == "success"
-    in_sets = np.array([s in CONTINUITY_SETS for s in sets], dtype=bool)
-    moved = np.flatnonzero(succeeded & in_sets & np.all(np.isfinite(perturbed), axis=1))
+    moved = np.flatnonzero(succeeded & seedable)
     report.continuity_checked = len(moved)
     returned_perturbed: dict[int, list[NDArray[np.float64]]] = {}
     if len(moved):
-        second = Answers(robot, targets[moved], perturbed[moved])
+        second = (continued.of_poses(moved) if continued is not None
+                  else Answers.solve(robot, targets[moved], perturbed[moved]))
         position2, rotation2, clean2 = second.screen(robot, model, targets[moved], allowed)
         continuous = clean2 & (second.nearest(robot, perturbed[moved]) <= CONTINUITY_DISTANCE)
         tally.residuals(position2[continuous[second.owner]], rotation2[continuous[second.owner]])
@@ -167,3 +184,29 @@ def check_all_batched(robot: Arm, model: TargetModel, q: NDArray[np.float64], se
                   returned_perturbed.get(k, []), missing.get(k, []))
     tally.finish(report)
     return True
+
+
+def _answers(robot: Arm, targets: NDArray[np.float64], seeds: NDArray[np.float64] | None,
+             perturbed: NDArray[np.float64], seedable: NDArray[np.bool_]
+             ) -> tuple[Answers, Answers | None]:
+    """The answers of every pose (seeded with ``seeds``, or unseeded), and, for an arm the
+    general 6R solver answers, those of every pose with its perturbed seed (where ``seedable``;
+    elsewhere its first seed) from the same roots: the general solver finds each pose's roots
+    once for both (:meth:`~dhkin.ik.general6r.General6RSolver.solve_batch_seeds`; each answer
+    equals its own ``ik_batch_detailed``, row for row), which halves the cost of the
+    continuity check on singular sets, where finding the roots is most of a pose's work. None
+    for the second (a closed-form family's roots depend on its seed): the caller solves the
+    continuity samples on their own."""
+    from dhkin.robot import Robot
+
+    # the shortcut is Robot.ik_batch_detailed's own work: an arm that answers otherwise (a
+    # subclass's own ik_batch_detailed) is asked as it answers
+    general = None
+    if isinstance(robot, Robot) and type(robot).ik_batch_detailed is Robot.ik_batch_detailed:
+        general = robot.general_solver
+    if general is None or not seedable.any():
+        return Answers.solve(robot, targets, seeds), None
+    first_seeds = np.zeros((len(targets), robot.dof)) if seeds is None else seeds
+    continuity_seeds = np.where(seedable[:, None], perturbed, first_seeds)
+    first, continued = general.solve_batch_seeds(targets, [seeds, continuity_seeds])
+    return Answers(first.q, first.valid), Answers(continued.q, continued.valid)

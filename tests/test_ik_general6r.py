@@ -562,6 +562,23 @@ def test_several_seed_sets_share_each_poses_roots() -> None:
         solver.solve_batch_seeds(bad, [None, Q[:5]])
 
 
+@pytest.mark.parametrize("name", ["motoman_hc10", "ur5"])
+def test_robot_answers_several_seed_sets_as_one_batch_each(name: str) -> None:
+    """Robot.ik_batch_seeds: one IKBatch per seed set, each ik_batch_detailed's with that set
+    (the general solver's from roots found once, a closed-form family's batch by batch), at
+    special angles (singular sets: the seed picks members) and random poses."""
+    robot = dhkin.load(name)
+    rng = np.random.default_rng(2612)
+    Q = np.concatenate([np.radians(rng.choice([-180.0, -90.0, 0.0, 90.0, 180.0], size=(10, 6))),
+                        robot.table.random_q(10, rng)])
+    T = robot.reference().fk(Q)
+    sets = [None, Q + rng.uniform(-0.05, 0.05, size=Q.shape)]
+    for seeds, answer in zip(sets, robot.ik_batch_seeds(T, sets), strict=True):
+        alone = robot.ik_batch_detailed(T, seeds)
+        for field in ("q", "valid", "flags", "branch", "residuals", "projection", "dropped"):
+            assert np.array_equal(getattr(answer, field), getattr(alone, field)), field
+
+
 #: A regular root of the tilted UR5 at q5 = 0 (sigma_min 0.03; check_general6r's q5 sample 812)
 #: that the damped Newton left 5.7e-13 m off: its polishing stopped at a step still damped after
 #: rejections on the way, which gained less than twofold (docs/general6r.md, "Speed, third pass").

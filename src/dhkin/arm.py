@@ -11,6 +11,7 @@ URDF joint values (rad, m), base to tip.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
@@ -70,3 +71,8 @@ class Arm(Protocol):
                           tolerance: float = ..., tcp: ArrayLike | None = None,
                           copies: bool = False, chunk_size: int = ...,
                           workers: int | None = None) -> IKBatch: ...
+
+    def ik_batch_seeds(self, T: ArrayLike, q_seeds: Sequence[ArrayLike | None],
+                       tolerance: float = ..., tcp: ArrayLike | None = None,
+                       copies: bool = False, chunk_size: int = ...,
+                       workers: int | None = None) -> list[IKBatch]: ...

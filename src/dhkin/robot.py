@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -268,6 +268,24 @@ class Robot:
             return general.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
         return self.ik_solver.solve_batch(T, q_seed, tolerance, tcp, copies, chunk_size,
                                           workers)
+
+    def ik_batch_seeds(self, T: ArrayLike, q_seeds: Sequence[ArrayLike | None],
+                       tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,
+                       copies: bool = False, chunk_size: int = DEFAULT_CHUNK,
+                       workers: int | None = None) -> list[IKBatch]:
+        """:meth:`ik_batch_detailed` of the poses T once per seed set of ``q_seeds`` (each None,
+        (6,) or (N, 6)), in order: answer s is ``ik_batch_detailed(T, q_seeds[s], ...)`` row for
+        row. The general 6R solver finds each pose's roots once for every set (they do not
+        depend on the seed, which chooses copies and curve members only): the answers of a pose
+        under several seeds at about the cost of one. A closed-form family's roots depend on its
+        seed (the seeded candidates of its singular sets): one batch per set."""
+        general = self.general_solver
+        # a subclass that answers otherwise (its own ik_batch_detailed) is asked as it answers
+        if general is None or type(self).ik_batch_detailed is not Robot.ik_batch_detailed:
+            return [self.ik_batch_detailed(T, q_seed, tolerance, tcp, copies, chunk_size, workers)
+                    for q_seed in q_seeds]
+        self._check_batch_memory(T, copies)
+        return general.solve_batch_seeds(T, q_seeds, tolerance, tcp, copies, chunk_size, workers)
 
     def ik_batch_chunks(self, T: ArrayLike, q_seed: ArrayLike | None = None,
                         tolerance: float = DEFAULT_TOLERANCE, tcp: ArrayLike | None = None,

@@ -31,8 +31,8 @@ child process. What changes is how the work is done, not what is checked:
   with their perturbed seeds; the nearest solution to each seed is found on arrays, and any
   sample not cleared goes through :func:`~dhkin.validation.sample_checks.check_continuity`.
   For an arm the general 6R solver answers, both batches come from one search for each pose's
-  roots (:meth:`~dhkin.ik.general6r.General6RSolver.solve_batch_seeds`: its roots do not depend
-  on the seed, and each seed set's answer equals its own ``ik_batch_detailed``, row for row).
+  roots (:meth:`~dhkin.robot.Robot.ik_batch_seeds`: its roots do not depend on the seed, and
+  each seed set's answer equals its own ``ik_batch_detailed``, row for row).
 """
 
 from __future__ import annotations
@@ -191,22 +191,15 @@ def _answers(robot: Arm, targets: NDArray[np.float64], seeds: NDArray[np.float64
              ) -> tuple[Answers, Answers | None]:
     """The answers of every pose (seeded with ``seeds``, or unseeded), and, for an arm the
     general 6R solver answers, those of every pose with its perturbed seed (where ``seedable``;
-    elsewhere its first seed) from the same roots: the general solver finds each pose's roots
-    once for both (:meth:`~dhkin.ik.general6r.General6RSolver.solve_batch_seeds`; each answer
-    equals its own ``ik_batch_detailed``, row for row), which halves the cost of the
-    continuity check on singular sets, where finding the roots is most of a pose's work. None
-    for the second (a closed-form family's roots depend on its seed): the caller solves the
+    elsewhere its first seed) in the same call (:meth:`~dhkin.robot.Robot.ik_batch_seeds`: the
+    general solver finds each pose's roots once for both seed sets; each answer equals its own
+    ``ik_batch_detailed``, row for row), which halves the cost of the continuity check on
+    singular sets, where finding the roots is most of a pose's work. None for the second
+    otherwise (a closed-form family's roots depend on its seed): the caller solves the
     continuity samples on their own."""
-    from dhkin.robot import Robot
-
-    # the shortcut is Robot.ik_batch_detailed's own work: an arm that answers otherwise (a
-    # subclass's own ik_batch_detailed) is asked as it answers
-    general = None
-    if isinstance(robot, Robot) and type(robot).ik_batch_detailed is Robot.ik_batch_detailed:
-        general = robot.general_solver
-    if general is None or not seedable.any():
+    if robot.ik_family != "general6r" or not seedable.any():
         return Answers.solve(robot, targets, seeds), None
     first_seeds = np.zeros((len(targets), robot.dof)) if seeds is None else seeds
     continuity_seeds = np.where(seedable[:, None], perturbed, first_seeds)
-    first, continued = general.solve_batch_seeds(targets, [seeds, continuity_seeds])
+    first, continued = robot.ik_batch_seeds(targets, [seeds, continuity_seeds])
     return Answers(first.q, first.valid), Answers(continued.q, continued.valid)

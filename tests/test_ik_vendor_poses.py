@@ -153,39 +153,49 @@ def special_q(robot: dhkin.Robot, n: int, rng: np.random.Generator) -> np.ndarra
 def shoulder_singular_q(robot: dhkin.Robot, n: int, rng: np.random.Generator) -> np.ndarray:
     """Joint vectors where the two shoulder branches meet: q2 solved (bisection on Pinocchio's
     model) so that the wrist centre (IRB 1200: on axis 1) or the wrist point (UR: in the plane of
-    axis 1 and the common direction of axes 2-4) has no reach left across axis 1."""
+    axis 1 and the common direction of axes 2-4) has no reach left across axis 1.
+
+    The candidates are drawn one at a time (the generator's draws as ever), each one's grid of q2
+    goes through Pinocchio as one batch, and the accepted ones are bisected together, row by row
+    the same steps (the sign at ``low`` never changes: ``low`` only moves to a point of its sign).
+    """
     reference = robot.reference()
     spherical = robot.ik_solver.family == "spherical_wrist"
     frame = robot.table.joints[4].link  # DH frame 5: the wrist centre (spherical) or point
-    out = []
+
+    def reach(rows: np.ndarray) -> np.ndarray:
+        T = reference.fk(rows, frame=frame)
+        cosine, sine = np.cos(rows[:, 0]), np.sin(rows[:, 0])
+        if spherical:  # signed distance of the wrist centre from axis 1 along x of the arm
+            return cosine * T[:, 0, 3] + sine * T[:, 1, 3]
+        # UR: the wrist point's component along the reach direction (axis 1 x n), the heading
+        # (cos q1, sin q1, 0); summed in the order of a dot product
+        return T[:, 0, 3] * cosine + T[:, 1, 3] * sine + T[:, 2, 3] * 0.0
+
+    def with_q2(rows: np.ndarray, q2: np.ndarray) -> np.ndarray:
+        rows = rows.copy()
+        rows[:, 1] = q2
+        return rows
+
+    grid = np.linspace(robot.lower[1], robot.upper[1], 49)
+    out, lows, highs = [], [], []
     while len(out) < n:
         q = robot.table.random_q(1, rng)[0]
-
-        def reach(q2: float, q: np.ndarray = q) -> float:
-            trial = q.copy()
-            trial[1] = q2
-            T = reference.fk(trial, frame=frame)
-            if spherical:  # signed distance of the wrist centre from axis 1 along x of the arm
-                x, y = T[0, 3], T[1, 3]
-                return float(np.cos(trial[0]) * x + np.sin(trial[0]) * y)
-            # UR: the wrist point's component along the reach direction (axis 1 x n)
-            point = T[:3, 3]
-            heading = np.array([np.cos(trial[0]), np.sin(trial[0]), 0.0])
-            return float(point @ heading)
-
-        grid = np.linspace(robot.lower[1], robot.upper[1], 49)
-        values = np.array([reach(v) for v in grid])
+        values = reach(with_q2(np.repeat(q[None], len(grid), axis=0), grid))
         changes = np.flatnonzero(np.sign(values[1:]) != np.sign(values[:-1]))
         if not changes.size:
             continue
-        low, high = grid[changes[0]], grid[changes[0] + 1]
-        for _ in range(100):
-            middle = 0.5 * (low + high)
-            low, high = (middle, high) if np.sign(reach(middle)) == np.sign(reach(low)) \
-                else (low, middle)
-        q[1] = 0.5 * (low + high)
+        lows.append(grid[changes[0]])
+        highs.append(grid[changes[0] + 1])
         out.append(q)
-    return np.array(out)
+    q, low, high = np.array(out), np.array(lows), np.array(highs)
+    sign_at_low = np.sign(reach(with_q2(q, low)))
+    for _ in range(100):
+        middle = 0.5 * (low + high)
+        same = np.sign(reach(with_q2(q, middle))) == sign_at_low
+        low, high = np.where(same, middle, low), np.where(same, high, middle)
+    q[:, 1] = 0.5 * (low + high)
+    return q
 
 
 @pytest.fixture(scope="module", params=EXACT_TABLES)

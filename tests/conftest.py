@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import dhkin
+from dhkin.reference import Reference
 
 REPO = Path(__file__).resolve().parents[1]
 #: The vendor reference URDFs shipped with the project (provenance and licences:
@@ -47,6 +48,17 @@ def oracle_errors(robot: dhkin.Robot, q: np.ndarray,
     from dhkin.transforms import pose_error
 
     return pose_error(robot.reference().fk(q), T)
+
+
+def oracle_sigma_min(reference: Reference, q: np.ndarray) -> np.ndarray:
+    """``reference.manipulability(row).sigma_min`` of each row of q (M, dof), bit for bit (the
+    same Jacobians, the same LAPACK SVD matrix by matrix), without three SVDs and a dataclass a
+    row: the smallest singular value of Pinocchio's LOCAL_WORLD_ALIGNED Jacobian (0 for fewer
+    than six joints)."""
+    if reference.dof < 6:
+        return np.zeros(len(q))
+    return np.linalg.svd(reference.jacobians(q, reference="local_world_aligned"),
+                         compute_uv=False)[:, -1]
 
 
 @pytest.fixture(scope="session")

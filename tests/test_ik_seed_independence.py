@@ -31,6 +31,7 @@ from dhkin.tolerances import DEFAULT_TOLERANCE
 from dhkin.transforms import pose_error
 from dhkin.validation.references import target_model
 
+from .conftest import oracle_sigma_min
 from .test_ik_vendor_poses import (
     EXACT_TABLES,
     REFINED_TABLES,
@@ -78,7 +79,7 @@ def test_the_seed_chooses_it_never_finds(name: str) -> None:
                         f"seed, e.g. q = {q[differ[0]].tolist()}: unseeded "
                         f"{sorted(plain[differ[0]])}, seeded {sorted(by_q[differ[0]])}, seed "
                         f"moved {sorted(by_moved[differ[0]])}")
-    sigma = np.array([robot.reference().manipulability(x).sigma_min for x in q])
+    sigma = oracle_sigma_min(robot.reference(), q)
     fixed = sigma >= SIGMA_FLOOR
     position, rotation = pose_error(T, robot.reference().fk(q))
     allowed = JOINT_EXACT + np.maximum(position, rotation) / np.maximum(sigma, 1e-300)
@@ -96,7 +97,7 @@ def test_the_seed_chooses_it_never_finds(name: str) -> None:
         # seed's member of a near-singular family is not such a point, nor a copy within the
         # slack beyond a limit set onto it: that costs up to the tolerance)
         solutions = batch.q[batch.valid]
-        at = np.array([robot.reference().manipulability(x).sigma_min for x in solutions])
+        at = oracle_sigma_min(robot.reference(), solutions)
         residual = batch.residuals[batch.valid].max(axis=1)
         on_limit = ((solutions == robot.lower) | (solutions == robot.upper)).any(axis=1)
         exact = (at >= newton_floor) & ~on_limit

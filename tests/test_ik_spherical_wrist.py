@@ -137,6 +137,12 @@ def oracle_max_errors(robot: dhkin.Robot, q: np.ndarray, T: np.ndarray) -> tuple
     return float(position.max()), float(rotation.max())
 
 
+def oracle_row_errors(robot: dhkin.Robot, q: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Per row, the larger of the position (m) and rotation (rad) errors of Pinocchio FK(q)
+    (M, n) against T (M, 4, 4)."""
+    return np.maximum(*pose_error(robot.reference().fk(q), T))
+
+
 def returned_rows(Q: np.ndarray, valid: np.ndarray, T: np.ndarray):
     """Flatten the valid solutions of a batch: (M, n) values, (M, 4, 4) targets, (M,) pose index."""
     pose = np.nonzero(valid)[0]
@@ -463,9 +469,12 @@ def check_singular_set(robot: dhkin.Robot, q: np.ndarray, arms: np.ndarray,
     T = robot.reference().fk(q)
     principal, principal_valid, principal_flags, branches = principal_branches(robot, T, q)
     np.testing.assert_array_equal(branches.dropped, 0)
-    worst = oracle_max_errors(robot, principal[principal_valid],
-                              np.repeat(T, principal_valid.sum(axis=1), axis=0))
-    assert max(worst) <= IK_TOLERANCE, worst
+    # each branch solution's error, kept for the flips' resolution below
+    principal_error = np.zeros(principal_valid.shape)
+    principal_error[principal_valid] = oracle_row_errors(
+        robot, principal[principal_valid], np.repeat(T, principal_valid.sum(axis=1), axis=0))
+    worst = float(principal_error.max())
+    assert worst <= IK_TOLERANCE, worst
     check_distinct(principal, principal_valid, q)
     every = robot.ik_batch_detailed(T, q_seed=q, copies=True)
     default = robot.ik_batch_detailed(T, q_seed=q)
@@ -514,7 +523,8 @@ def check_singular_set(robot: dhkin.Robot, q: np.ndarray, arms: np.ndarray,
                      & (wrapped_gap(principal, principal_valid, q) <= COMPLETENESS_TOLERANCE))
     original_ok = (whole_gap <= COMPLETENESS_TOLERANCE) | at_limit_only
     flip = flipped_wrist(q)
-    assert max(oracle_max_errors(robot, flip, T)) <= 1e-12  # the flip is a solution
+    wrist_flip_error = oracle_row_errors(robot, flip, T)
+    assert wrist_flip_error.max() <= 1e-12  # the flip is a solution
     flip_gap = wrapped_gap(principal, principal_valid, flip)
     sampled_wrist = wrist_measure(robot, q)
     # the flip is a distinct solution unless q's family at the tolerance reaches it: measured
@@ -525,13 +535,15 @@ def check_singular_set(robot: dhkin.Robot, q: np.ndarray, arms: np.ndarray,
     # the pose fixes a solution only to its residual over sigma_min of J (first order): near
     # q5 = 0 two flips exact to rounding (~1e-15) can differ by ~1e-15 / sigma_min in q4, q6
     resolution = np.full(len(q), COMPLETENESS_TOLERANCE)
+    # (the residual of a pose: the largest error of its flip and its branch solutions, at least
+    # 1e-16; the errors computed above, row by row)
     unresolved = np.flatnonzero(flip_gap > COMPLETENESS_TOLERANCE)
-    for i in unresolved:
-        rows = np.vstack([flip[i][None], principal[i][principal_valid[i]]])
-        residual = max(max(oracle_max_errors(robot, rows, np.broadcast_to(T[i], (len(rows), 4,
-                                                                                   4)))), 1e-16)
-        sigma_min = np.linalg.svd(robot.reference().jacobian(flip[i]), compute_uv=False)[-1]
-        resolution[i] += 2.0 * residual / max(sigma_min, 1e-300)
+    if unresolved.size:
+        residual = np.maximum(np.maximum(wrist_flip_error[unresolved],
+                                         principal_error[unresolved].max(axis=1)), 1e-16)
+        sigma_min = np.linalg.svd(robot.reference().jacobians(flip[unresolved]),
+                                  compute_uv=False)[:, -1]
+        resolution[unresolved] += 2.0 * residual / np.maximum(sigma_min, 1e-300)
     flip_ok = one_family | (flip_gap <= resolution)
     # family poses: a member of the flip's branch at least as near the seed as the flip
     to_seed = np.sum(wrapped_difference(principal, q[:, None, :]) ** 2, axis=-1)
@@ -588,10 +600,12 @@ def check_continuity(robot: dhkin.Robot, q: np.ndarray, rng: np.random.Generator
         # the arm as sampled, to what the pose resolves: its residual over the smallest singular
         # value of J off the singular family (the second smallest; ~1e-8 rad near a fold)
         arm_gap = np.abs(wrapped_difference(chosen[:, :3], q[:, :3])).max(axis=1)
-        for i in np.flatnonzero(arm_gap > 1e-9):
-            residual = max(max(oracle_max_errors(robot, chosen[i][None], T[i][None])), 1e-16)
-            sigma = np.linalg.svd(robot.reference().jacobian(q[i]), compute_uv=False)[-2]
-            assert arm_gap[i] <= 1e-9 + 2.0 * residual / sigma, (q[i], chosen[i])
+        far = np.flatnonzero(arm_gap > 1e-9)
+        if far.size:
+            residual = np.maximum(oracle_row_errors(robot, chosen[far], T[far]), 1e-16)
+            sigma = np.linalg.svd(robot.reference().jacobians(q[far]), compute_uv=False)[:, -2]
+            beyond = far[~(arm_gap[far] <= 1e-9 + 2.0 * residual / sigma)]
+            assert beyond.size == 0, (q[beyond[0]], chosen[beyond[0]])
         np.testing.assert_allclose(np.abs(chosen[:, 4]), np.abs(q[:, 4]), atol=1e-9)
         sign = 1.0 if member == "sum" else -1.0
         np.testing.assert_allclose(wrapped_difference(chosen[:, 3] + sign * chosen[:, 5],

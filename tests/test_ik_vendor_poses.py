@@ -28,13 +28,14 @@ import numpy as np
 import pytest
 
 import dhkin
+from dhkin.ik import IKSolutions
 from dhkin.ik.core import FLAG_BAND
 from dhkin.ik.geometry import joint_axes
 from dhkin.reference import Reference
 from dhkin.transforms import pose_error
 from dhkin.vendors import VENDOR_REFERENCES
 
-from .conftest import REFERENCE_URDFS
+from .conftest import REFERENCE_URDFS, oracle_sigma_min
 
 TOLERANCE = 1e-9
 JOINT_TOLERANCE = 1e-6
@@ -83,24 +84,15 @@ class Run:
         position, rotation = pose_error(T, self.robot.reference().fk(q))
         self.deviation = max(self.deviation, float(position.max()), float(rotation.max()))
         rng = np.random.default_rng(seed)
+        answered: list[int] = []
+        found: list[IKSolutions] = []
         for k in range(len(q)):
             solutions = self.robot.ik(T[k], q_seed=q[k])
             if not len(solutions):
                 self.empty.append(q[k])
                 continue
-            position, rotation = pose_error(self.reference.fk(solutions.q),
-                                            np.broadcast_to(T[k], (len(solutions), 4, 4)))
-            residual = max(float(position.max()), float(rotation.max()))
-            self.worst = max(self.worst, residual)
-            distance = np.abs(wrapped(solutions.q - q[k])).max(axis=1)
-            best = int(np.argmin(distance))
-            if distance[best] > JOINT_TOLERANCE:
-                sigma = self.robot.reference().manipulability(q[k]).sigma_min
-                noise = max(TOLERANCE, residual)  # vendor deviation (<= 6.2e-10) and residual
-                if distance[best] > JOINT_TOLERANCE + noise / max(sigma, 1e-300):
-                    self.missing.append((q[k], float(distance[best])))
-            if wrist_singular and "wrist" not in solutions.flags[best]:
-                self.unflagged.append(q[k])
+            answered.append(k)
+            found.append(solutions)
             if continuity:
                 moved = q[k] + PERTURBATION * rng.choice([-1.0, 1.0], size=len(q[k]))
                 moved = np.clip(moved, self.robot.lower, self.robot.upper)
@@ -109,6 +101,32 @@ class Run:
                        else np.inf)
                 if gap > CONTINUITY:
                     self.discontinuous.append((q[k], float(gap)))
+        if not answered:
+            return
+        # The solutions of every pose at once (the same numbers, row by row, as pose by pose):
+        # through the vendor's URDF in one call (Pinocchio still runs once per row), each pose's
+        # residual the largest error of its own rows, its distance to q the smallest of them.
+        counts = np.array([len(solutions) for solutions in found])
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        rows = np.concatenate([solutions.q for solutions in found])
+        position, rotation = pose_error(self.reference.fk(rows),
+                                        np.repeat(T[answered], counts, axis=0))
+        residuals = np.maximum(np.maximum.reduceat(position, starts),
+                               np.maximum.reduceat(rotation, starts))
+        self.worst = max(self.worst, float(residuals.max()))
+        distances = np.abs(wrapped(rows - np.repeat(q[answered], counts, axis=0))).max(axis=1)
+        nearest = np.minimum.reduceat(distances, starts)
+        for i in np.flatnonzero(nearest > JOINT_TOLERANCE):
+            k = answered[i]
+            sigma = self.robot.reference().manipulability(q[k]).sigma_min
+            noise = max(TOLERANCE, residuals[i])  # vendor deviation (<= 6.2e-10) and residual
+            if nearest[i] > JOINT_TOLERANCE + noise / max(sigma, 1e-300):
+                self.missing.append((q[k], float(nearest[i])))
+        if wrist_singular:  # the nearest solution (the first of equals) is flagged "wrist"
+            for i, k in enumerate(answered):
+                best = int(np.argmin(distances[starts[i]:starts[i] + counts[i]]))
+                if "wrist" not in found[i].flags[best]:
+                    self.unflagged.append(q[k])
 
     def assert_clean(self, label: str) -> None:
         print(f"\n{label}: max residual on the vendor URDF {self.worst:.2e} (vendor model vs "
@@ -135,39 +153,49 @@ def special_q(robot: dhkin.Robot, n: int, rng: np.random.Generator) -> np.ndarra
 def shoulder_singular_q(robot: dhkin.Robot, n: int, rng: np.random.Generator) -> np.ndarray:
     """Joint vectors where the two shoulder branches meet: q2 solved (bisection on Pinocchio's
     model) so that the wrist centre (IRB 1200: on axis 1) or the wrist point (UR: in the plane of
-    axis 1 and the common direction of axes 2-4) has no reach left across axis 1."""
+    axis 1 and the common direction of axes 2-4) has no reach left across axis 1.
+
+    The candidates are drawn one at a time (the generator's draws as ever), each one's grid of q2
+    goes through Pinocchio as one batch, and the accepted ones are bisected together, row by row
+    the same steps (the sign at ``low`` never changes: ``low`` only moves to a point of its sign).
+    """
     reference = robot.reference()
     spherical = robot.ik_solver.family == "spherical_wrist"
     frame = robot.table.joints[4].link  # DH frame 5: the wrist centre (spherical) or point
-    out = []
+
+    def reach(rows: np.ndarray) -> np.ndarray:
+        T = reference.fk(rows, frame=frame)
+        cosine, sine = np.cos(rows[:, 0]), np.sin(rows[:, 0])
+        if spherical:  # signed distance of the wrist centre from axis 1 along x of the arm
+            return cosine * T[:, 0, 3] + sine * T[:, 1, 3]
+        # UR: the wrist point's component along the reach direction (axis 1 x n), the heading
+        # (cos q1, sin q1, 0); summed in the order of a dot product
+        return T[:, 0, 3] * cosine + T[:, 1, 3] * sine + T[:, 2, 3] * 0.0
+
+    def with_q2(rows: np.ndarray, q2: np.ndarray) -> np.ndarray:
+        rows = rows.copy()
+        rows[:, 1] = q2
+        return rows
+
+    grid = np.linspace(robot.lower[1], robot.upper[1], 49)
+    out, lows, highs = [], [], []
     while len(out) < n:
         q = robot.table.random_q(1, rng)[0]
-
-        def reach(q2: float, q: np.ndarray = q) -> float:
-            trial = q.copy()
-            trial[1] = q2
-            T = reference.fk(trial, frame=frame)
-            if spherical:  # signed distance of the wrist centre from axis 1 along x of the arm
-                x, y = T[0, 3], T[1, 3]
-                return float(np.cos(trial[0]) * x + np.sin(trial[0]) * y)
-            # UR: the wrist point's component along the reach direction (axis 1 x n)
-            point = T[:3, 3]
-            heading = np.array([np.cos(trial[0]), np.sin(trial[0]), 0.0])
-            return float(point @ heading)
-
-        grid = np.linspace(robot.lower[1], robot.upper[1], 49)
-        values = np.array([reach(v) for v in grid])
+        values = reach(with_q2(np.repeat(q[None], len(grid), axis=0), grid))
         changes = np.flatnonzero(np.sign(values[1:]) != np.sign(values[:-1]))
         if not changes.size:
             continue
-        low, high = grid[changes[0]], grid[changes[0] + 1]
-        for _ in range(100):
-            middle = 0.5 * (low + high)
-            low, high = (middle, high) if np.sign(reach(middle)) == np.sign(reach(low)) \
-                else (low, middle)
-        q[1] = 0.5 * (low + high)
+        lows.append(grid[changes[0]])
+        highs.append(grid[changes[0] + 1])
         out.append(q)
-    return np.array(out)
+    q, low, high = np.array(out), np.array(lows), np.array(highs)
+    sign_at_low = np.sign(reach(with_q2(q, low)))
+    for _ in range(100):
+        middle = 0.5 * (low + high)
+        same = np.sign(reach(with_q2(q, middle))) == sign_at_low
+        low, high = np.where(same, middle, low), np.where(same, high, middle)
+    q[:, 1] = 0.5 * (low + high)
+    return q
 
 
 @pytest.fixture(scope="module", params=EXACT_TABLES)
@@ -264,7 +292,7 @@ def double_singular_run(name: str, nudge: float) -> Run:
     robot = dhkin.load(name)
     assert robot.ik_solver.family == "spherical_wrist"
     q = elbow_and_wrist_singular_q(robot, 200, np.random.default_rng(106))
-    sigma = np.array([robot.reference().manipulability(row).sigma_min for row in q])
+    sigma = oracle_sigma_min(robot.reference(), q)
     assert np.median(sigma) < 1e-5  # both singular sets on purpose
     run = Run(robot, vendor(name))
     run.check(q, wrist_singular=True, continuity=True, seed=6, nudge=nudge)

@@ -43,16 +43,19 @@ def vee(S: NDArray[np.float64]) -> NDArray[np.float64]:
 def finite_difference_jacobians(reference: Reference, q: NDArray[np.float64],
                                 frame: str | None) -> dict[str, NDArray[np.float64]]:
     """The three Jacobians of ``frame`` at q, by five-point differences of Pinocchio FK."""
-    T = reference.fk(q, frame=frame)
-    R, p = T[:3, :3], T[:3, 3]
     n = len(q)
-    dp = np.empty((3, n))
-    w = np.empty((3, n))
+    rows = [q]
     for i in range(n):
         e = np.zeros(n)
         e[i] = STEP
-        Tp2, Tp1, Tm1, Tm2 = reference.fk(np.array([q + 2 * e, q + e, q - e, q - 2 * e]),
-                                          frame=frame)
+        rows += [q + 2 * e, q + e, q - e, q - 2 * e]
+    poses = reference.fk(np.array(rows), frame=frame)  # one call: Pinocchio row by row
+    T = poses[0]
+    R, p = T[:3, :3], T[:3, 3]
+    dp = np.empty((3, n))
+    w = np.empty((3, n))
+    for i in range(n):
+        Tp2, Tp1, Tm1, Tm2 = poses[1 + 4 * i:5 + 4 * i]
         dT = (-Tp2 + 8 * Tp1 - 8 * Tm1 + Tm2) / (12 * STEP)
         dp[:, i] = dT[:3, 3]
         w[:, i] = vee(dT[:3, :3] @ R.T)

@@ -10,7 +10,7 @@
 // cores of a small machine share the work.
 //
 // Only the header that names the matrix types is included: the callers' headers would bring
-// every inline function of the solver into this unit too (~6 s of GCC's time, which
+// every inline function of the solver into this unit too (6-12 s of GCC's time, which
 // decomposed_types.hpp saves).
 #include <Eigen/Dense>
 

@@ -1,7 +1,7 @@
 // The matrix types of the general 6R solver that Eigen's decompositions take off the hot paths
 // (the SVDs and small eigenproblems of cpp/eigen_instances.cpp), in a header of their own: that
 // unit instantiates the decompositions once for these types and needs nothing else of the
-// solver. Including the solver's headers there for four aliases cost ~6 s of GCC's time (their
+// solver. Including the solver's headers there for these aliases cost 6-12 s of GCC's time (their
 // inline functions and the Eigen expressions in them; docs/architecture.md, "Build time (helper
 // i25ak)").
 #pragma once

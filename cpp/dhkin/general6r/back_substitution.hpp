@@ -14,6 +14,7 @@
 #include <cmath>
 #include <utility>
 
+#include "dhkin/general6r/decomposed_types.hpp"  // RightSide
 #include "dhkin/general6r/elimination.hpp"
 #include "dhkin/general6r/null_space.hpp"
 
@@ -25,7 +26,7 @@ namespace dhkin::general6r {
 constexpr int kAlternations = 4;
 
 using Products = Eigen::Matrix<double, 8, 1>;        // y: the right side's non-constant products
-using RightSide = Eigen::Matrix<double, kQuantities, 8>;  // Q
+// RightSide (Q): decomposed_types.hpp.
 using Quantities = Eigen::Matrix<double, kQuantities, 1>;
 
 // The right side of one pose: Q y = rhs, with Q's rank and pseudo-inverse.

@@ -23,6 +23,7 @@
 
 #include "dhkin/chain.hpp"
 #include "dhkin/family.hpp"
+#include "dhkin/general6r/decomposed_types.hpp"  // Jacobian
 #include "dhkin/general6r/square_lu.hpp"
 #include "dhkin/newton.hpp"
 #include "dhkin/simd.hpp"
@@ -37,7 +38,7 @@ constexpr int kFullSteps = 4;
 // that tries costs an evaluation per root), so the steps stop there.
 constexpr double kRoundingUlps = 4.0;
 
-using Jacobian = Eigen::Matrix<double, 6, kDof, Eigen::RowMajor>;
+// Jacobian (6 x kDof, row-major): decomposed_types.hpp.
 
 // The chain at one set of joint values (per lane for V = Lanes): the frames each joint moves
 // about and the end frame (chain_frames: fk()'s and fk_frames' values), the error twist against

@@ -25,14 +25,12 @@
 #include <limits>
 
 #include "dhkin/angles.hpp"
+#include "dhkin/general6r/decomposed_types.hpp"  // kMaxSplit, Small, ShiftRows
 #include "dhkin/general6r/elimination.hpp"
 
 namespace dhkin::general6r {
 
-// Largest null space split: the eight rows j <= 1 of the shift along j must hold m independent
-// vectors. A larger cluster of equal eigenvalues is split in its eight smallest directions (more
-// than eight roots sharing one joint value is a curve of solutions).
-constexpr int kMaxSplit = 8;
+// kMaxSplit, the largest null space split: decomposed_types.hpp.
 // Half-angle rotations tried for the shift operators: a root makes one rotation singular (its
 // half angle at delta + pi / 2); with up to kMaxSplit roots, kMaxSplit + 1 rotations spread over
 // pi leave one at least pi / 18 (10 deg) from all of them.
@@ -46,9 +44,7 @@ constexpr int kInverseIterations = 2;
 
 // A basis of a null space (12 x m, m <= kMaxSplit).
 using Basis = Eigen::Matrix<double, kMonomials, Eigen::Dynamic, 0, kMonomials, kMaxSplit>;
-using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSplit, kMaxSplit>;
-// The low and the high rows of shift_operator (at most 9 x kMaxSplit).
-using ShiftRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, kMaxSplit>;
+// Small (X, Y) and ShiftRows (the low and the high rows of shift_operator): decomposed_types.hpp.
 
 }  // namespace dhkin::general6r
 

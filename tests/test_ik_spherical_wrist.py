@@ -1392,3 +1392,24 @@ def test_direction_flip_mirrors_the_solutions():
         order = np.lexsort(np.round(mine.T, 9))
         mirror_order = np.lexsort(np.round(-mirrored.T, 9))
         np.testing.assert_allclose(mine[order], -mirrored[mirror_order], atol=1e-9)
+
+
+def test_a_triply_singular_pose_answers_near_a_moved_seed():
+    """The anthropomorphic arm folded on its shoulder with the wrist flipped, q = (90, 90, 180,
+    90, 180, 0) deg (shoulder, elbow and wrist singular: q2's member search runs with q1 and the
+    wrist free too), seeded with q moved by 0.05 rad on joints 1, 2, 4 and 6: a returned row lies
+    within 0.25 rad of the seed on every joint (`dhkin check`'s continuity), and every row
+    verifies on Pinocchio. Along q2 the seed's family has the sampled member at an isolated value
+    (the grid hits it at seed - 0.05): a parabolic line search from that grid point (Brent's, as
+    tried on the offset wrist's q6) left the members.hpp search with a member 1.6 rad away
+    (`dhkin validate anthropomorphic_arm`: 73 samples of its special set)."""
+    robot = dhkin.load("anthropomorphic_arm")
+    q = np.radians([90.0, 90.0, 180.0, 90.0, 180.0, 0.0])
+    seed = q + np.array([-0.05, 0.05, 0.0, 0.05, 0.0, 0.05])
+    T = robot.reference().fk(q[None])[0]
+    result = robot.ik(T, seed)
+    targets = np.broadcast_to(T, (len(result.q), 4, 4))
+    position, rotation = pose_error(robot.reference().fk(result.q), targets)
+    assert max(position.max(), rotation.max()) <= IK_TOLERANCE
+    gap = np.abs((result.q - seed + np.pi) % (2.0 * np.pi) - np.pi).max(axis=1)
+    assert gap.min() <= 0.25, gap

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <limits>
 
-#include "dhkin/brent.hpp"
 #include "dhkin/golden.hpp"
 #include "dhkin/plan.hpp"
 #include "dhkin/settle.hpp"
@@ -18,8 +17,11 @@ namespace members {
 
 // The nearest member of a one-parameter family (q1 or q2 free): a grid over the whole turn (this
 // half-width, this step, rad) around the seed's value of the free joint: the other joints follow
-// the free one, so the nearest member can be far from the seed's value of it; then Brent's search
-// to kPrecision within a step of the best grid point (the distance has kinks: no derivatives).
+// the free one, so the nearest member can be far from the seed's value of it; then golden-section
+// search to kPrecision within a step of the best grid point (the distance has kinks: no
+// derivatives). Not Brent's search as on the offset wrist's q6 (brent.hpp): with q1 or q2 free
+// and a second joint free too the distance here has isolated values the grid hits and a
+// parabola's steps do not tie to (test_a_triply_singular_pose_answers_near_a_moved_seed).
 constexpr double kHalfWidth = kPi;
 constexpr double kStep = 0.05;
 constexpr int kGrid = 63;  // ceil(kHalfWidth / kStep)
@@ -62,10 +64,9 @@ inline int nearest_member(const Plan& plan, const Frame& T, const Joints& seed, 
     if (value < best) best_t = t, best = value;
   }
   if (best == INFINITY) return -1;
-  // the best point scored, never worse than the grid's
-  const double nearest = brent_minimum(best_t - kStep, best_t + kStep, kPrecision, best_t, best,
-                                       distance);
-  distance(nearest);  // `found`: the nearest member's candidates
+  const double middle = golden_section(best_t - kStep, best_t + kStep, kPrecision, distance,
+                                       [](double left, double right) { return left <= right; });
+  if (distance(middle) > best) distance(best_t);
   candidate = found.q[b];
   return found.flags[b];
 }

@@ -252,10 +252,14 @@ class General6R {
                              Input<double, nb::shape<-1, -1, kDof>> seeds, double tolerance,
                              bool copies, const nb::object& tcp) const {
     const std::size_t n = T.shape(0), rows = seeds.shape(1);
-    if (rows != 1 && rows != n) throw std::invalid_argument("seeds: expected 1 or N rows per set");
+    if (rows != 1 && rows != n) {
+      throw std::invalid_argument("seeds: expected 1 or N rows per set");
+    }
     const std::size_t stride = rows == 1 ? 0 : kDof;
     std::vector<const double*> sets;
-    for (std::size_t s = 0; s < seeds.shape(0); ++s) sets.push_back(seeds.data() + s * rows * kDof);
+    for (std::size_t s = 0; s < seeds.shape(0); ++s) {
+      sets.push_back(seeds.data() + s * rows * kDof);
+    }
     const g6::Tip at = tip(tcp);
     std::vector<g6::BatchAnswers> out;
     {

@@ -530,6 +530,7 @@ def test_several_seed_sets_share_each_poses_roots() -> None:
     naming its index."""
     from dhkin.errors import InputError
     from dhkin.ik.result import FLAG_SETS
+    from dhkin.validation.references import target_model
 
     robot = dhkin.load("motoman_hc10")
     solver = robot.general_solver
@@ -538,7 +539,7 @@ def test_several_seed_sets_share_each_poses_roots() -> None:
     special = np.radians(rng.choice([-180.0, -90.0, 0.0, 90.0, 180.0], size=(16, 6)))
     lower, upper = np.maximum(robot.table.lower, -math.pi), np.minimum(robot.table.upper, math.pi)
     Q = np.concatenate([special, rng.uniform(lower, upper, size=(8, 6))])
-    T = robot.reference().fk(Q)
+    T = target_model(robot, "vendor").fk(Q)  # Pinocchio on Yaskawa's URDF
     sets = [None, Q, Q + rng.uniform(-0.05, 0.05, size=Q.shape), Q[1]]
     members_differ = False
     for copies in (False, True):
@@ -566,17 +567,25 @@ def test_several_seed_sets_share_each_poses_roots() -> None:
 def test_robot_answers_several_seed_sets_as_one_batch_each(name: str) -> None:
     """Robot.ik_batch_seeds: one IKBatch per seed set, each ik_batch_detailed's with that set
     (the general solver's from roots found once, a closed-form family's batch by batch), at
-    special angles (singular sets: the seed picks members) and random poses."""
+    special angles (singular sets: the seed picks members), q5 = 0 and random poses, targets by
+    Pinocchio on the vendor's URDF; no seed set is an InputError."""
+    from dhkin.errors import InputError
+    from dhkin.validation.references import target_model
+
     robot = dhkin.load(name)
     rng = np.random.default_rng(2612)
+    wrist_singular = robot.table.random_q(5, rng)
+    wrist_singular[:, 4] = 0.0
     Q = np.concatenate([np.radians(rng.choice([-180.0, -90.0, 0.0, 90.0, 180.0], size=(10, 6))),
-                        robot.table.random_q(10, rng)])
-    T = robot.reference().fk(Q)
+                        wrist_singular, robot.table.random_q(10, rng)])
+    T = target_model(robot, "vendor").fk(Q)
     sets = [None, Q + rng.uniform(-0.05, 0.05, size=Q.shape)]
     for seeds, answer in zip(sets, robot.ik_batch_seeds(T, sets), strict=True):
         alone = robot.ik_batch_detailed(T, seeds)
         for field in ("q", "valid", "flags", "branch", "residuals", "projection", "dropped"):
             assert np.array_equal(getattr(answer, field), getattr(alone, field)), field
+    with pytest.raises(InputError, match="q_seeds"):
+        robot.ik_batch_seeds(T, [])
 
 
 #: A regular root of the tilted UR5 at q5 = 0 (sigma_min 0.03; check_general6r's q5 sample 812)

@@ -1,9 +1,10 @@
 // Brent's minimisation over one parameter, without derivatives (R. P. Brent, "Algorithms for
 // Minimization without Derivatives", 1973, chapter 5): the line search of the offset wrist's
-// nearest member (q6 free at q5 = 0; offset.hpp). Where the scores near the best point lie on a parabola it
-// steps to the parabola's vertex (superlinear convergence on a smooth minimum: ~10 scores to
-// 1e-9 where golden sections take ~38); elsewhere (kinks, infinite scores of points without a
-// member) it takes a golden-section step, so it never does much worse than golden sections.
+// nearest member (q6 free at q5 = 0; offset.hpp). Where the scores near the best point lie on a
+// parabola it steps to the parabola's vertex (superlinear convergence on a smooth minimum: ~10
+// scores to 1e-9 where golden sections take ~38); elsewhere (kinks, infinite scores of points
+// without a member) it takes a golden-section step, so it never does much worse than golden
+// sections.
 #pragma once
 
 #include <cmath>

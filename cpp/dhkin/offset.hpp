@@ -22,9 +22,9 @@
 
 #include "dhkin/angles.hpp"
 #include "dhkin/bands.hpp"
+#include "dhkin/brent.hpp"
 #include "dhkin/family.hpp"
 #include "dhkin/frame.hpp"
-#include "dhkin/brent.hpp"
 
 namespace dhkin {
 

@@ -279,6 +279,8 @@ class Robot:
         depend on the seed, which chooses copies and curve members only): the answers of a pose
         under several seeds at about the cost of one. A closed-form family's roots depend on its
         seed (the seeded candidates of its singular sets): one batch per set."""
+        if not q_seeds:
+            raise InputError("q_seeds: expected at least one seed set", field="q_seeds")
         general = self.general_solver
         # a subclass that answers otherwise (its own ik_batch_detailed) is asked as it answers
         if general is None or type(self).ik_batch_detailed is not Robot.ik_batch_detailed:

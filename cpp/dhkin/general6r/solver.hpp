@@ -254,13 +254,16 @@ inline std::vector<BatchAnswers> solve_batch_seeds(const Solver& solver, const T
   std::vector<BatchAnswers> out(seeds.size());
   for (BatchAnswers& answers : out) answers.reserve(n, 8);
   for (std::size_t i = 0; i < n; ++i) {
-    const PoseRoots pose = pose_roots(solver, tip, T + 16 * i, tolerance);
+    PoseRoots pose = pose_roots(solver, tip, T + 16 * i, tolerance);
     if (pose.answer.outcome == Outcome::kRejected) {
       for (BatchAnswers& answers : out) answers.reject(i, pose.answer.status);
       return out;
     }
     for (std::size_t s = 0; s < seeds.size(); ++s) {
-      const Answer answer = answer_for_seed(solver, tip, pose, seed_of(seeds[s], seed_stride, i),
+      const Joints seed = seed_of(seeds[s], seed_stride, i);
+      // each set but the last answers from a copy (the seed moves singular roots)
+      const bool last = s + 1 == seeds.size();
+      const Answer answer = answer_for_seed(solver, tip, last ? std::move(pose) : pose, seed,
                                             tolerance, copies);
       out[s].rows.insert(out[s].rows.end(), answer.rows.begin(), answer.rows.end());
       out[s].answered(static_cast<std::int64_t>(answer.rows.size()), answer.projection,

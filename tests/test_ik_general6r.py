@@ -376,12 +376,14 @@ def test_nearly_double_eigenvalue_keeps_both_roots(name: str, q: list[float]) ->
     assert len(answer) % 2 == 0
 
 
-def test_deflation_kept_off_at_the_leading_condition() -> None:
+def test_companion_kept_off_at_the_leading_condition() -> None:
     """At an HC10 pose (scripts/compare_builds.py's sample 4445) every leading matrix is
     conditioned at 1e-8 .. 3e-8 and four eigenvalues are nearly double (roots 3e-5 to 9e-5 rad
     apart in q2): the companion with its spurious eigenvalues +-i deflated put one pair's
-    copies 2.4e-3 rad apart, beyond kCluster, and lost a root (candidates.hpp,
-    kDeflationCondition); unseeded, every root of the multistart reference comes back."""
+    copies 2.4e-3 rad apart, beyond kCluster, and lost a root; undeflated, the AVX-512 build's
+    put two pairs' copies 2.0e-3 and 3.6e-3 apart and lost two. QZ on the pencil is used below
+    kCompanionCondition (candidates.hpp); unseeded, every root of the multistart reference
+    comes back."""
     from dhkin.validation.multistart import RootReference, missing_roots
     from dhkin.validation.references import ReferenceSpec, TargetModel
 

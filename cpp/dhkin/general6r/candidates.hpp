@@ -3,13 +3,14 @@
 //
 // M(x) = A x^2 + B x + C (12 x 12), theta_k = lead + 2 atan(x). Its leading matrix A = M at
 // theta_k = lead + pi must be invertible: of the four angles shift + {0, 1, 2, 3} pi/2 the first
-// whose matrix is conditioned within kLeadCondition becomes lead (else the best of them), so
+// whose matrix is conditioned within kCompanionCondition becomes lead (else the best of them), so
 // that no root lies at infinity unless all four are roots. The eigenvalues come from the
 // companion matrix [[0, I], [-A^-1 C, -A^-1 B]] (24 x 24, eigenvalues.hpp; its eight spurious
-// eigenvalues +-i deflated, deflation.hpp) where A is well conditioned, else from QZ on the
-// 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps the eigenvalues of the regular
-// part). Where no leading matrix is well conditioned, or a cluster holds more than kMaxSplit
-// eigenvalues, the pose is solved moved (all_candidates), by QZ.
+// eigenvalues +-i deflated, deflation.hpp) where A is conditioned within kCompanionCondition,
+// else from QZ on the 24 x 24 pencil (Eigen's real QZ: backward stable, it keeps the eigenvalues
+// of the regular part, and A^-1 does not amplify its rounding). Where no leading matrix is
+// conditioned within kLeadCondition, or a cluster holds more than kMaxSplit eigenvalues, the pose
+// is solved moved as well (all_candidates), by QZ.
 #pragma once
 
 #include <Eigen/Dense>
@@ -28,20 +29,23 @@
 
 namespace dhkin::general6r {
 
-// The leading matrix is accepted when its reciprocal condition (1-norm) is at least this: the
-// eigenvalues then lose at most ~1e-8 relative to rounding, well within Newton's basin.
+// A pose whose best leading matrix is conditioned (reciprocal condition, 1-norm) below this has an
+// ill-conditioned eigenproblem: its eigenvalues lose ~1e-8 relative to rounding, and it is solved
+// moved as well (all_candidates).
 constexpr double kLeadCondition = 1e-8;
-// The companion's spurious eigenvalues +-i are deflated (deflation.hpp) only where its leading
-// matrix is conditioned within this, three orders better than kLeadCondition. On random poses the
-// deflated eigenvalues are as accurate as the 24 x 24's (the same largest errors within each band
-// of the leading condition; docs/general6r.md, "Speed, seventh pass"), but on a pose's worst they
-// lost up to three digits more (per-pose error ratios up to 1.2e3), and at an HC10 pose whose four
-// leading matrices were all conditioned at 1e-8 .. 3e-8 (four nearly double eigenvalues, whose
-// computed copies scatter by ~1e-3 in either matrix) the deflated copies of one fell 2.4e-3 apart,
-// beyond kCluster, and a root was lost. Three lost digits at this condition leave the eigenvalues
-// within the error the 24 x 24 is allowed at kLeadCondition. A pose whose first leading matrix is
-// conditioned within kLeadCondition but not this one tries the other three for one that is.
-constexpr double kDeflationCondition = 1e3 * kLeadCondition;
+// The companion (deflated where the arm has the spurious eigenvalues +-i, deflation.hpp) is used
+// only where its leading matrix is conditioned within this, three orders better than
+// kLeadCondition; elsewhere QZ on the pencil. The companion's rounding is amplified by A^-1: on
+// 500-1,000 random poses per arm its largest eigenvalue errors were 1.6e-7 .. 5.2e-6 with the
+// first lead's condition within 1e-8 .. 1e-5 and at most 1.2e-7 above (docs/general6r.md, "Speed,
+// seventh pass"), and at an HC10 pose whose four leading matrices are all conditioned at 1e-8 ..
+// 3e-8 (four nearly double eigenvalues, roots 3e-5 .. 9e-5 rad apart) the copies of a double
+// eigenvalue fell 2.0e-3 and 3.6e-3 apart in the AVX-512 build (2.4e-3 deflated in the AVX2
+// one), beyond kCluster: two roots were lost. QZ's eigenvalues there are the roots' to within
+// kCluster, and all eight come back. Such poses are rare (~0.1 % of random poses of the
+// CRX-10iA and the HC10, none of the xArm6's; 1.7 % of the special-angle ones' eliminations),
+// so the QZ's cost is not felt.
+constexpr double kCompanionCondition = 1e3 * kLeadCondition;
 // Eigenvalues of the eliminated joint whose angles (rad, real parts) lie closer than this are
 // one cluster, split at each member into as many starts as the cluster has members. Taking two
 // eigenvalues together costs starts, never roots (each member's own null vector is in its
@@ -153,22 +157,21 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, std:
   const auto M_at = [&](double angle) {
     return stacked((Pc * std::cos(angle) + Ps * std::sin(angle) + P1) * el.half2);
   };
-  // leading matrix: the first of M at four angles conditioned within kDeflationCondition (its
-  // companion deflated), else the first conditioned within kLeadCondition, else the best of them
+  // leading matrix: the first of M at four angles conditioned within kCompanionCondition (its
+  // companion's eigenvalues, deflated where the arm has spurious ones), else the best of them
+  // (QZ on the pencil); a moved pose (always QZ) takes the first within kLeadCondition
   double best = -1.0, lead = el.shift;
   Matrix12 A, A_inverse, inverse_here;
-  bool accepted = false, deflate = false;
+  bool companion = false;
   for (int quarter = 0; quarter < 4; ++quarter) {
     const double angle = el.shift + quarter * 0.5 * kPi;
     const Matrix12 M = M_at(angle + kPi);
     const double ratio = reciprocal_condition(M, inverse_here);
-    if (el.has_spurious && !moved && ratio >= kDeflationCondition) {
-      best = ratio, lead = angle, A = M, A_inverse = inverse_here, deflate = true;
+    if (ratio > best) best = ratio, lead = angle, A = M, A_inverse = inverse_here;
+    if (moved ? ratio >= kLeadCondition : ratio >= kCompanionCondition) {
+      companion = !moved;
       break;
     }
-    if (!accepted && ratio > best) best = ratio, lead = angle, A = M, A_inverse = inverse_here;
-    accepted = accepted || ratio >= kLeadCondition;
-    if (accepted && (!el.has_spurious || moved)) break;
   }
   info.lead_condition = best;
   // B and C of M(x) = A x^2 + B x + C with theta_k = lead + 2 atan(x)
@@ -177,8 +180,9 @@ inline EliminationInfo candidates(const Elimination& el, const Frame& T_dh, std:
   const Matrix12 C = M_at(lead);
   Eigenvalues eigenvalues;
   int count = kEigenvalues;
-  if (best >= kLeadCondition && !moved) {
-    count = companion_eigenvalues(A_inverse, B, C, deflate ? &el.spurious : nullptr, eigenvalues);
+  if (companion) {
+    count = companion_eigenvalues(A_inverse, B, C, el.has_spurious ? &el.spurious : nullptr,
+                                  eigenvalues);
     if (count == 0) return info;
   } else {
     Matrix24 left = Matrix24::Zero(), right_matrix = Matrix24::Identity();

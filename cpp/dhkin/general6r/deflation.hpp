@@ -16,7 +16,7 @@
 // That first-order bound does not tell where it loses digits (|G| stays below 4 on random poses,
 // and was 0.005 at the HC10 pose that lost a root; docs/general6r.md, "Speed, seventh pass"):
 // candidates.hpp deflates only where the leading matrix is conditioned within
-// kDeflationCondition.
+// kCompanionCondition.
 #pragma once
 
 #include <Eigen/Dense>

@@ -396,6 +396,17 @@ def test_companion_kept_off_at_the_leading_condition() -> None:
     answer = robot.ik(T)
     assert len(roots) == 8
     assert not missing_roots(model, T, roots, answer.q, DEFAULT_TOLERANCE, SAME)
+    # the pose lies in the band where QZ replaces the companion (kLeadCondition = 1e-8 <= the
+    # best leading matrix's reciprocal condition < kCompanionCondition = 1e-5), and its starts
+    # are the roots themselves, each nearly double eigenvalue split into its two roots (within
+    # kCluster = 1e-3 rad; the companion's starts were 0.5-1 rad off four of them)
+    solver = robot.general_solver
+    assert solver is not None
+    starts, _, lead_condition, _ = solver.core.candidates(
+        np.ascontiguousarray(solver.target_dh(T)))
+    assert 1e-8 <= lead_condition < 1e-5
+    offsets = np.abs(_wrap(np.asarray(roots)[:, None] - np.asarray(starts)[None])).max(axis=2)
+    assert offsets.min(axis=1).max() <= 1e-3
 
 
 def test_arrangement_ranked_by_what_its_starts_cost() -> None:

@@ -843,6 +843,10 @@ NB_MODULE(_core, m) {
   m.attr("FLAG_BAND") = dhkin::kFlagBand;
   m.attr("MERGE_ANGLE") = dhkin::kMergeAngle;
   m.attr("FK_ROUNDING") = dhkin::kFkRounding;
+  // doubles per vector register the core was built for (cpp/dhkin/simd.hpp): 8 with AVX-512, 4
+  // with AVX, 2 otherwise (the portable build); the lanes' speed, and the last bits of Eigen's
+  // kernels, follow it
+  m.attr("VECTOR_WIDTH") = dhkin::simd::kNative;
 
   m.def("pose_status", [](Input<double, nb::shape<4, 4>> T) { return static_cast<int>(dhkin::pose_status(T.data())); },
         "T"_a, "0 for a usable pose (4, 4), else why not (1 not finite, 2 bottom row, 3 not a rotation).");

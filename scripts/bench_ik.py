@@ -63,6 +63,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import dhkin
+from dhkin import _core
 from dhkin.errors import FamilyError
 from dhkin.ik.core import EXTRA_ROOTS
 from dhkin.ik.workers import default_workers
@@ -716,8 +717,11 @@ def machine() -> str:
     except OSError:
         pass
     load = ", ".join(f"{v:.2f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
+    width = _core.VECTOR_WIDTH
+    vectors = {8: "AVX-512", 4: "AVX"}.get(width, "SSE2 / portable")
     return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy "
-            f"{np.__version__}, dhkin {version_of('dhkin')} (compiled core); load average {load}")
+            f"{np.__version__}, dhkin {version_of('dhkin')} (compiled core, built for {vectors}: "
+            f"{width} doubles a vector); load average {load}")
 
 
 def build_libraries(robot: dhkin.Robot, peers: Sequence[str], rtb_poses: int

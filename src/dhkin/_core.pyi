@@ -13,6 +13,7 @@ BOTTOM_ROW_TOLERANCE: float
 FLAG_BAND: float
 MERGE_ANGLE: float
 FK_ROUNDING: float
+VECTOR_WIDTH: int
 
 def pose_status(T: NDArray[np.float64]) -> int: ...
 def project(T: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]: ...

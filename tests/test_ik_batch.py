@@ -320,6 +320,22 @@ def test_wrap_to_minus_pi_exclusive_pi_inclusive():
 # Threads, input errors
 
 
+def test_the_core_says_which_vector_width_it_was_built_for():
+    """VECTOR_WIDTH (doubles a vector register; benchmarks print it with the machine) is one of
+    the widths cpp/dhkin/simd.hpp builds for, and a build for AVX-512 runs only where the CPU has
+    it (the import would have failed with an illegal instruction otherwise; Linux's cpuinfo)."""
+    assert _core.VECTOR_WIDTH in (2, 4, 8)
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as info:
+            flags = next((line for line in info if line.startswith("flags")), "").split()
+    except OSError:
+        flags = []
+    if flags and _core.VECTOR_WIDTH == 8:
+        assert "avx512f" in flags
+    if flags and _core.VECTOR_WIDTH == 4:
+        assert "avx" in flags
+
+
 def test_threads_get_the_same_answers(load_robot):
     """The kernels release the GIL and robot.ik keeps its buffers per thread."""
     robot = load_robot("ur5")

@@ -376,19 +376,20 @@ def test_nearly_double_eigenvalue_keeps_both_roots(name: str, q: list[float]) ->
     assert len(answer) % 2 == 0
 
 
-def test_companion_kept_off_at_the_leading_condition() -> None:
+@pytest.mark.parametrize("kind", ["exact", "vendor"])
+def test_companion_kept_off_at_the_leading_condition(kind: str) -> None:
     """At an HC10 pose (scripts/compare_builds.py's sample 4445) every leading matrix is
     conditioned at 1e-8 .. 3e-8 and four eigenvalues are nearly double (roots 3e-5 to 9e-5 rad
     apart in q2): the companion with its spurious eigenvalues +-i deflated put one pair's
     copies 2.4e-3 rad apart, beyond kCluster, and lost a root; undeflated, the AVX-512 build's
     put two pairs' copies 2.0e-3 and 3.6e-3 apart and lost two. QZ on the pencil is used below
     kCompanionCondition (candidates.hpp); unseeded, every root of the multistart reference
-    comes back."""
+    comes back. The target by Pinocchio on the generated URDF and on Yaskawa's."""
     from dhkin.validation.multistart import RootReference, missing_roots
-    from dhkin.validation.references import ReferenceSpec, TargetModel
+    from dhkin.validation.references import target_model
 
     robot = dhkin.load("motoman_hc10")
-    model = TargetModel(ReferenceSpec(kind="exact"), robot.reference())
+    model = target_model(robot, kind)
     q = np.array([1.7237244375179364, 1.7191605905125185, 6.07845360793609,
                   -1.9076647940283957, 2.8273094626327593, 0.5648040965542207])
     T = model.fk(q)

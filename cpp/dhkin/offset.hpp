@@ -373,14 +373,21 @@ inline bool nearest_member(const OffsetGeometry& g, const Frame& T_home, const S
     if (distance < best) best_t = t, best = distance;
   }
   if (best == std::numeric_limits<double>::infinity()) return false;
+  // the member of the point Brent's search keeps as its best (a score at or below the best so
+  // far, its own rule), so that the point it returns need not be evaluated again
+  double kept_t = NAN, kept_score = best;
   const auto value = [&](double t) {
     const Member m = member(g, T_home, t1, q5, t, reach_side, seed, request, e);
-    return m.valid ? m.distance : std::numeric_limits<double>::infinity();
+    const double score = m.valid ? m.distance : std::numeric_limits<double>::infinity();
+    if (score <= kept_score) kept_t = t, kept_score = score, found = m;
+    return score;
   };
   // the best point scored, never worse than the grid's
   const double nearest = brent_minimum(best_t - kMemberStep, best_t + kMemberStep,
                                        kMemberPrecision, best_t, best, value);
-  found = member(g, T_home, t1, q5, nearest, reach_side, seed, request, e);
+  if (!(kept_t == nearest)) {  // the grid's point (scored in lanes, not here)
+    found = member(g, T_home, t1, q5, nearest, reach_side, seed, request, e);
+  }
   return true;
 }
 

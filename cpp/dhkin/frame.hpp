@@ -185,6 +185,13 @@ inline Frame lane(const FrameT<Lanes>& f, int l) {
   return out;
 }
 inline Frame lane(const Frame& f, int) { return f; }
+// Lane l of frames of lanes set to f.
+inline void set_lane(FrameT<Lanes>& out, int l, const Frame& f) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) set_lane(out.R[r][c], l, f.R[r][c]);
+    set_lane(out.p[r], l, f.p[r]);
+  }
+}
 
 // The rotation by the rotation vector w (Rodrigues' formula; first order below 1e-12 rad,
 // exact to rounding at that size).

@@ -33,10 +33,12 @@
 // chased as before.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
 #include "dhkin/plan.hpp"
+#include "dhkin/simd.hpp"
 
 namespace dhkin {
 
@@ -59,6 +61,32 @@ inline std::array<double, kBranches> margins(const Plan& plan,
   return out;
 }
 
+// The box of poses the bound climbs over: T_dh moved by +-steps[0] (m) along each axis of DH
+// frame 0, then turned by +-steps[1] (rad) about each axis through the flange's origin; pose
+// 2 d + side is direction d (x, y, z moves, then x, y, z turns) with side 0 the + step.
+constexpr int kBoxPoses = 12;
+inline std::array<Frame, kBoxPoses> box_poses(const Frame& T_dh, const double (&steps)[2]) {
+  std::array<Frame, kBoxPoses> out;
+  for (int kind = 0; kind < 2; ++kind) {  // translations, rotations
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int side = 0; side < 2; ++side) {
+        const double sign = side == 0 ? 1.0 : -1.0;
+        Vec3 step{0.0, 0.0, 0.0};
+        (axis == 0 ? step.x : axis == 1 ? step.y : step.z) = sign * steps[kind];
+        Frame T = T_dh;
+        if (kind == 0) {
+          T.p[0] += step.x, T.p[1] += step.y, T.p[2] += step.z;
+        } else {  // turned about the flange's origin
+          T = rotation_vector(step) * T_dh;
+          for (int r = 0; r < 3; ++r) T.p[r] = T_dh.p[r];
+        }
+        out[2 * (3 * kind + axis) + side] = T;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace reach_bound
 
 // Per branch: whether the exact chain may reach the branch (the bound above). True for every
@@ -77,31 +105,34 @@ inline std::array<bool, kBranches> long_shots_in_reach(const Plan& plan, const F
     if (valid[b] && !(at[b] >= band)) return out;  // at a fold of the ideal model
   }
   const double steps[2] = {band, band / plan.lever};  // m, rad: the box's half-widths
-  std::array<double, kBranches> climb{};
-  const Joints none{};
-  Candidates moved;
-  for (int kind = 0; kind < 2; ++kind) {  // translations, rotations
-    for (int axis = 0; axis < 3; ++axis) {
-      std::array<double, kBranches> rise{};
-      for (double sign : {1.0, -1.0}) {
-        Vec3 step{0.0, 0.0, 0.0};
-        (axis == 0 ? step.x : axis == 1 ? step.y : step.z) = sign * steps[kind];
-        Frame T = T_dh;
-        if (kind == 0) {
-          T.p[0] += step.x, T.p[1] += step.y, T.p[2] += step.z;
-        } else {  // turned about the flange's origin
-          T = rotation_vector(step) * T_dh;
-          for (int r = 0; r < 3; ++r) T.p[r] = T_dh.p[r];
-        }
-        plan.solve_family(T, none, 0, band, moved);
-        const std::array<double, kBranches> there = reach_bound::margins(plan, moved.why);
-        for (int b = 0; b < kBranches; ++b) {
-          const double change = there[b] - at[b];
-          rise[b] = std::isfinite(change) ? std::max(rise[b], change) : INFINITY;
-        }
-      }
-      for (int b = 0; b < kBranches; ++b) climb[b] += rise[b];
+  const std::array<Frame, reach_bound::kBoxPoses> box = reach_bound::box_poses(T_dh, steps);
+  // the closed form at the box's poses, kLanes at a time (each lane's values as for that pose
+  // alone); spare lanes take T_dh and are not read
+  std::array<std::array<double, kBranches>, reach_bound::kBoxPoses> there;
+  JointsT<Lanes> none;
+  none.fill(Lanes(0.0));
+  for (int first = 0; first < reach_bound::kBoxPoses; first += kLanes) {
+    FrameT<Lanes> T = broadcast<Lanes>(T_dh);
+    const int count = std::min(kLanes, reach_bound::kBoxPoses - first);
+    for (int l = 0; l < count; ++l) set_lane(T, l, box[first + l]);
+    CandidatesT<Lanes> moved;
+    plan.solve_family(T, none, 0, band, moved);
+    for (int l = 0; l < count; ++l) {
+      std::array<double, kWhySize> why_l;
+      for (int i = 0; i < kWhySize; ++i) why_l[i] = lane(moved.why[i], l);
+      there[first + l] = reach_bound::margins(plan, why_l);
     }
+  }
+  std::array<double, kBranches> climb{};
+  for (int direction = 0; direction < 6; ++direction) {
+    std::array<double, kBranches> rise{};
+    for (int side = 0; side < 2; ++side) {
+      for (int b = 0; b < kBranches; ++b) {
+        const double change = there[2 * direction + side][b] - at[b];
+        rise[b] = std::isfinite(change) ? std::max(rise[b], change) : INFINITY;
+      }
+    }
+    for (int b = 0; b < kBranches; ++b) climb[b] += rise[b];
   }
   for (int b = 0; b < kBranches; ++b) out[b] = !(at[b] + climb[b] < 0.0);  // NaN: in reach
   return out;

@@ -203,6 +203,22 @@ inline void fk_frames(const Chain& chain, const double* q, Frame* frames) {
   frames[n] = state * chain.tail;
 }
 
+// fk_frames of a chain of at most kDof joints, its constant frames' products skipping their zero
+// terms (times_constant): the same values short of the sign of a zero. For loops that evaluate
+// one chain many times (refine), which build its shape once.
+inline void fk_frames(const Chain& chain, const ChainShape& shape, const double* q,
+                      Frame* frames) {
+  const int n = chain.dof();
+  Frame state = chain.joints[0].before;
+  for (int j = 0; j < n; ++j) {
+    if (j > 0) times_constant(state, chain.joints[j].before, shape.before[j]);
+    frames[j] = state;
+    apply_motion(state, chain.joints[j], q[j]);
+  }
+  times_constant(state, chain.tail, shape.tail);
+  frames[n] = state;
+}
+
 // Position (m) and rotation (rad) error of a frame against a target (per lane).
 template <class V>
 struct PoseErrorT {

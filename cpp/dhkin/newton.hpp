@@ -152,7 +152,8 @@ inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, cons
   double e[6], trial_e[6], J[6 * kDof], step[kDof];
   Joints trial, best = q;
   const double goal = kRefineFraction * tolerance;
-  fk_frames(chain, q.data(), frames.data());
+  const ChainShape shape(chain);  // Joints: at most kDof joints
+  fk_frames(chain, shape, q.data(), frames.data());
   PoseError error = error_twist(frames[kDof], target, e);
   double size = error.position * error.position + error.rotation * error.rotation;
   PoseError best_error = error;
@@ -178,7 +179,7 @@ inline PoseError refine(const Chain& chain, const Frame& target, Joints& q, cons
         for (int a = 0; a < kDof; ++a) longest = std::max(longest, std::abs(step[a]));
         const double shrink = longest > kMaxJointStep ? kMaxJointStep / longest : 1.0;
         for (int a = 0; a < kDof; ++a) trial[a] = q[a] + shrink * step[a];
-        fk_frames(chain, trial.data(), trial_frames.data());
+        fk_frames(chain, shape, trial.data(), trial_frames.data());
         ++evaluations;
         trial_error = error_twist(trial_frames[kDof], target, trial_e);
         trial_size = trial_error.position * trial_error.position +

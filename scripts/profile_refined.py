@@ -13,7 +13,8 @@ the pipeline chases on the exact chain before it drops them, unless cpp/dhkin/re
 shows that the exact chain cannot reach them), and against the least |sin q5| among the
 solutions answered (near the wrist singular set the valley scans and seeded candidates run). The
 mean is what ``ik_batch`` pays per pose; the median is the single-call figure of
-scripts/bench_ik.py.
+scripts/bench_ik.py. Also printed: the refined direct path alone on the poses it settles against
+the ideal model's whole batch on them (the floor of a refined table's batch time).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from __future__ import annotations
 import argparse
 import gc
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -55,6 +56,40 @@ def call_times(robot: dhkin.Robot, poses: np.ndarray) -> tuple[np.ndarray, np.nd
     return times, wrist
 
 
+def best_seconds(call: Callable[[], object], runs: int = 3) -> float:
+    """The fastest of `runs` wall times of call() (s)."""
+    best = np.inf
+    for _ in range(runs):
+        start = time.perf_counter()
+        call()
+        best = min(best, time.perf_counter() - start)
+    return float(best)
+
+
+def floor_lines(robot: dhkin.Robot, ideal: dhkin.Robot, poses: np.ndarray,
+                times: np.ndarray) -> list[str]:
+    """The refined direct path alone (closed form of the ideal model, Newton on the exact chain
+    for the eight branches in lanes, verification; ``refined_direct_answers``) on the poses it
+    settles, against the ideal model's whole ``ik_batch`` on the same poses: the least a refined
+    table's batch could cost per pose if no pose needed the pipeline."""
+    solver = robot.ik_solver
+    seeds = np.zeros((len(poses), robot.dof))  # unseeded: the zero seed, as robot.ik
+    settled = np.zeros(len(poses), np.bool_)
+    solver.core.refined_direct_answers(poses, seeds, 1e-9, solver.frames, settled)
+    direct = np.ascontiguousarray(poses[settled])
+    answered = np.zeros(len(direct), np.bool_)
+    direct_us = best_seconds(lambda: solver.core.refined_direct_answers(
+        direct, seeds[:len(direct)], 1e-9, solver.frames, answered)) / len(direct) * 1e6
+    ideal_us = best_seconds(
+        lambda: ideal.ik_batch(direct, copies=False, workers=1)) / len(direct) * 1e6
+    left = ~settled
+    return [f"refined direct path: settles {settled.mean():.1%} of the poses; on those it takes "
+            f"{direct_us:.2f} us per pose alone, the ideal model's whole ik_batch "
+            f"{ideal_us:.3f} us (x{direct_us / ideal_us:.1f}); the poses it leaves to the "
+            f"pipeline take {times[left].mean() if left.any() else 0.0:.0f} us per call on "
+            f"average, {times[left].sum() / times.sum():.1%} of the time", ""]
+
+
 def report(name: str, n: int) -> list[str]:
     robot = dhkin.load(name)
     q = robot.table.random_q(n, np.random.default_rng(25))
@@ -70,6 +105,7 @@ def report(name: str, n: int) -> list[str]:
     for limit in (10, 100, 1000):
         slow = times > limit
         lines.append(f"| {limit} us | {slow.mean():.1%} | {times[slow].sum() / times.sum():.1%} |")
+    lines += ["", *floor_lines(robot, ideal, poses, times)]
     lines += ["", "| ideal model branches | poses | median (us) | mean (us) | share of time |",
               "|---:|---:|---:|---:|---:|"]
     for count in np.unique(ideal_branches):

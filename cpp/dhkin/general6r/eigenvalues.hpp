@@ -42,7 +42,15 @@ inline double rescale(Matrix24& H, int n, int i, double column, double row) {
   for (double g = row / kRadix; column < g; column *= kRadix * kRadix) factor *= kRadix;
   for (double g = row * kRadix; column > g; column /= kRadix * kRadix) factor /= kRadix;
   if (!((column + row) / factor < kBalanceGain * total)) return 1.0;
-  for (int j = 0; j < n; ++j) H(i, j) /= factor;
+  // The row divided by the factor as multiplied by its reciprocal: the factor is a power of two,
+  // so where its reciprocal is a normal number that is exact and both give the exact quotient
+  // rounded once, the same bits (dividing entry by entry was a quarter of the balancing's time).
+  const double reciprocal = 1.0 / factor;
+  if (std::isnormal(reciprocal)) {
+    for (int j = 0; j < n; ++j) H(i, j) *= reciprocal;
+  } else {
+    for (int j = 0; j < n; ++j) H(i, j) /= factor;
+  }
   for (int j = 0; j < n; ++j) H(j, i) *= factor;
   return factor;
 }

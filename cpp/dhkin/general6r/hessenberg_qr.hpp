@@ -14,10 +14,10 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <cstring>
 #include <limits>
 
 #include "dhkin/general6r/elimination.hpp"
+#include "dhkin/general6r/four.hpp"
 
 namespace dhkin::general6r {
 
@@ -104,19 +104,6 @@ inline Reflector reflector(double x0, double x1, double x2) {
   out.v2 = x2 * pivot;
   return out;
 }
-
-// Four doubles in one vector register (GCC and Clang vector extensions: the build turns the
-// compiler's own vectoriser off, so vector code is written out). Arithmetic on them is element
-// by element and IEEE: each element gets the same bits as the same operations on a double.
-typedef double Four __attribute__((vector_size(4 * sizeof(double))));
-
-inline Four load_four(const double* p) {
-  Four out;
-  std::memcpy(&out, p, sizeof(out));
-  return out;
-}
-
-inline void store_four(double* p, const Four& v) { std::memcpy(p, &v, sizeof(v)); }
 
 // The reflector r (on rows and columns k .. k + 2, or k .. k + 1 without `Three`) applied to H
 // from both sides within the window [low, high]: from the left on columns k .. high, from the

@@ -27,6 +27,7 @@
 #include "dhkin/angles.hpp"
 #include "dhkin/general6r/decomposed_types.hpp"  // kMaxSplit, Small, ShiftRows
 #include "dhkin/general6r/elimination.hpp"
+#include "dhkin/general6r/monomial_lu.hpp"  // LU, lu_factor, lu_solve
 
 namespace dhkin::general6r {
 
@@ -70,59 +71,6 @@ inline Matrix12 homogeneous(const Matrix12& A, const Matrix12& B, const Matrix12
   }
   const double y = c / s;
   return A + B * y + C * (y * y);
-}
-
-// M's LU factors with partial pivoting: L (unit lower, its unit diagonal implicit) and U
-// (upper), each stored with zeros elsewhere, so that the factorisation and the solves run on
-// whole fixed-size columns (Eigen's vector kernels: the loops on the shrinking tails of M were
-// a tenth of a CRX-10iA pose's time); row k was swapped with pivots[k].
-struct LU {
-  Matrix12 L, U;
-  std::array<int, kMonomials> pivots;
-};
-
-// The LU factors of M (destroyed). A pivot of exactly zero (M singular in the arithmetic: the
-// eigenvalue exact) is replaced by rounding's size, eps |M|, as inverse iteration does, so that
-// the solve amplifies the null direction instead of failing.
-inline void lu_factor(Matrix12& M, LU& out) {
-  const double tiny = std::max(M.cwiseAbs().maxCoeff() * std::numeric_limits<double>::epsilon(),
-                               1e-300);
-  out.L.setZero();
-  for (int k = 0; k < kMonomials; ++k) {
-    const int below = kMonomials - 1 - k;
-    Eigen::Index p = 0;
-    M.col(k).tail(below + 1).cwiseAbs().maxCoeff(&p);
-    out.pivots[k] = k + static_cast<int>(p);
-    if (out.pivots[k] != k) {
-      M.row(k).swap(M.row(out.pivots[k]));
-      out.L.row(k).swap(out.L.row(out.pivots[k]));
-    }
-    if (M(k, k) == 0.0) M(k, k) = tiny;
-    if (below == 0) break;
-    // the multipliers, zeros at and above row k: subtracting them times row k leaves rows
-    // 0 .. k exactly as they are (x - a * 0 = x)
-    Vector12 multipliers = M.col(k) / M(k, k);
-    multipliers.head(k + 1).setZero();
-    out.L.col(k) = multipliers;
-    for (int j = k + 1; j < kMonomials; ++j) M.col(j) -= M(k, j) * multipliers;
-  }
-  out.U = M.triangularView<Eigen::Upper>();
-}
-
-// v <- M^-1 v from lu_factor's factors (column by column: contiguous in Eigen's storage).
-inline void lu_solve(const LU& lu, Vector12& v) {
-  for (int k = 0; k < kMonomials; ++k) {
-    if (lu.pivots[k] != k) std::swap(v(k), v(lu.pivots[k]));
-  }
-  for (int k = 0; k + 1 < kMonomials; ++k) v -= v(k) * lu.L.col(k);
-  for (int i = kMonomials - 1; i >= 0; --i) {
-    v(i) /= lu.U(i, i);
-    if (i > 0) {
-      const double value = v(i);
-      v -= value * lu.U.col(i);
-      v(i) = value;  // the column's own diagonal entry undone
-    }
-  }
 }
 
 // The null vector of M at the half angle `half` (a simple eigenvalue), by inverse iteration,

@@ -12,6 +12,7 @@
 
 #include "dhkin/newton.hpp"
 #include "dhkin/plan.hpp"
+#include "dhkin/refine_lanes_exact.hpp"
 
 // Compiled once, in cpp/eigen_instances.cpp (docs/architecture.md, "Build time").
 extern template Eigen::JacobiSVD<Eigen::Matrix<double, 6, dhkin::kDof>>&
@@ -142,10 +143,42 @@ struct TwinSearch {
   static constexpr int kStarts = 2 * static_cast<int>(std::size(continuation::kTwinSteps));
   Joints from{};       // the solution searched from (none yet while `refined` is 0)
   Joints weakest{};    // J's weakest direction at `from`
-  int refined = 0;     // starts refined so far, in search order (a search refines at least one)
+  int refined = 0;     // starts refined so far, in search order (kLanes at a time)
   std::array<Joints, kStarts> root{};
   std::array<PoseError, kStarts> error{};
 };
+
+// Start k of the twin search from q: q + sign * size * weakest, kTwinSteps[k / 2] each way.
+inline Joints twin_start(const Joints& q, const Joints& weakest, int k) {
+  const double size = continuation::kTwinSteps[k / 2];
+  const double sign = k % 2 == 0 ? 1.0 : -1.0;
+  Joints trial;
+  for (int j = 0; j < kDof; ++j) trial[j] = q[j] + sign * size * weakest[j];
+  return trial;
+}
+
+// Refines the twin search's starts from `first` on, up to kLanes of them, in lanes at once:
+// refine_lanes_exact gives each the bits refine() gives it alone, so the cached roots and errors
+// are those the search would have refined one by one.
+inline void refine_twin_starts(const Chain& chain, const Frame& target, double tolerance,
+                               int first, TwinSearch& search) {
+  const int count = std::min(kLanes, TwinSearch::kStarts - first);
+  JointsT<Lanes> starts;
+  Mask active = uniform(false);
+  for (int l = 0; l < kLanes; ++l) {
+    // unused lanes repeat the first start (a finite one: their arithmetic still runs)
+    const Joints trial = twin_start(search.from, search.weakest, first + (l < count ? l : 0));
+    for (int j = 0; j < kDof; ++j) set_lane(starts[j], l, trial[j]);
+    set_lane(active, l, l < count);
+  }
+  refine_lanes_exact(chain, ChainShape(chain), target, starts, JointMask{}, tolerance, {}, active);
+  for (int l = 0; l < count; ++l) {
+    Joints& root = search.root[first + l];
+    for (int j = 0; j < kDof; ++j) root[j] = lane(starts[j], l);
+    search.error[first + l] = check(chain, root.data(), target);
+  }
+  search.refined = first + count;
+}
 
 // A solution near the solution q on the far side of the fold it sits by, other than q and the ok
 // rows of `known`: Newton from q displaced along J's weakest direction, kTwinSteps each way. `out`
@@ -160,27 +193,26 @@ inline bool find_twin(const Chain& chain, const Frame& target, const Joints& q, 
     search.weakest = weakest_direction(chain, q, JointMask{});
     search.refined = 0;
   }
-  const JointMask none{};
-  int start = 0;
-  for (double size : kTwinSteps) {
-    for (double sign : {1.0, -1.0}) {
-      if (start == search.refined) {
+  for (int start = 0; start < TwinSearch::kStarts; ++start) {
+    if (start == search.refined) {
+      if (chain.dof() == kDof) {
+        refine_twin_starts(chain, target, tolerance, start, search);
+      } else {
         Joints& trial = search.root[start];
-        for (int j = 0; j < kDof; ++j) trial[j] = q[j] + sign * size * search.weakest[j];
-        refine(chain, target, trial, none, tolerance);
+        trial = twin_start(q, search.weakest, start);
+        refine(chain, target, trial, JointMask{}, tolerance);
         search.error[start] = check(chain, trial.data(), target);
         ++search.refined;
       }
-      out = search.root[start];
-      const PoseError& error = search.error[start];
-      ++start;
-      if (error.within(tolerance) && apart(out, q, distinct)) {
-        bool fresh = true;
-        for (int b = 0; b < kBranches; ++b) {
-          if (known.ok[b] && !apart(out, known.q[b], distinct)) fresh = false;
-        }
-        if (fresh) return true;
+    }
+    out = search.root[start];
+    const PoseError& error = search.error[start];
+    if (error.within(tolerance) && apart(out, q, distinct)) {
+      bool fresh = true;
+      for (int b = 0; b < kBranches; ++b) {
+        if (known.ok[b] && !apart(out, known.q[b], distinct)) fresh = false;
       }
+      if (fresh) return true;
     }
   }
   return false;

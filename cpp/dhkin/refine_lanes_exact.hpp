@@ -1,0 +1,219 @@
+// refine() (newton.hpp) on kLanes independent starts at once, one start per lane, every lane
+// giving exactly the bits refine() gives for its start.
+//
+// The convention: lane l of refine_lanes_exact(chain, shape, target, q, fixed, tolerance,
+// settings) equals refine(chain, target, q_l, fixed, tolerance, settings) for q_l = lane l of q,
+// in q (the best iterate) and in the errors returned. The lanes share the chain, the target, the
+// `fixed` mask, the tolerance and the settings; each lane follows refine()'s control flow under
+// masks: its own iterations, chain evaluations against the budget, damping (grown a hundredfold
+// on a rejected step or a rank failure, divided by ten on a taken one), the kMaxJointStep
+// shrink, polishing, stop_on_stall and the best iterate. The arithmetic is refine()'s, on the
+// lane type, operation for operation (the chain's frames by chain_frames, which are fk_frames'
+// with times_constant; sincos and atan2 give each lane the double's bits; simd.hpp: IEEE, no
+// contraction, no autovectorisation), so a lane cannot tell it was not run alone. What differs is
+// only work: a lane that has stopped, or that waits for its step while another lane retries a
+// rejected one, computes values that are not used.
+//
+// Unlike refine_lanes (newton_lanes.hpp), which gives up a lane wherever refine() would damp, this
+// runs the whole of refine(): for call sites that refine many starts of one chain and target and
+// must answer as refine() does (the twin search's starts, the valley scan's held members).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "dhkin/chain.hpp"
+#include "dhkin/family.hpp"
+#include "dhkin/newton.hpp"
+#include "dhkin/simd.hpp"
+
+namespace dhkin {
+
+namespace newton {
+
+// least_squares (newton.hpp) per lane, each lane with its own damping: the same stacked system,
+// the same Householder reflections and back substitution, with refine()'s early returns as a
+// mask. Returns where the free columns were of full rank (elsewhere `step` is not meaningful).
+DHKIN_INLINE Mask least_squares_lanes(const Lanes* J, const Lanes* e, const JointMask& fixed,
+                                      Lanes damping, Lanes* step) {
+  constexpr int rows = 6 + kDof;
+  Lanes A[rows][kDof];
+  Lanes b[rows];
+  for (int j = 0; j < kDof; ++j) step[j] = Lanes(0.0);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < kDof; ++c) A[r][c] = Lanes(0.0);
+    b[r] = r < 6 ? e[r] : Lanes(0.0);
+  }
+  int m = 0;  // free columns
+  for (int j = 0; j < kDof; ++j) {
+    if (fixed[j]) continue;
+    Lanes column(0.0);
+    for (int r = 0; r < 6; ++r) {
+      A[r][m] = J[r * kDof + j];
+      column += J[r * kDof + j] * J[r * kDof + j];
+    }
+    A[6 + m][m] = sqrt(damping * column);
+    ++m;
+  }
+  Mask solved = uniform(true);
+  for (int k = 0; k < m; ++k) {  // Householder reflection of column k (rows k .. 6 + k)
+    const int end = 7 + k;
+    Lanes length(0.0);
+    for (int r = k; r < end; ++r) length += A[r][k] * A[r][k];
+    length = sqrt(length);
+    solved = solved && !(length == 0.0);  // refine() returns false here
+    const Lanes alpha = select(A[k][k] >= 0.0, -length, length);
+    A[k][k] -= alpha;
+    Lanes v_norm(0.0);
+    for (int r = k; r < end; ++r) v_norm += A[r][k] * A[r][k];
+    const Mask reflect = v_norm > 0.0;
+    if (any(reflect)) {
+      for (int c = k + 1; c < m; ++c) {
+        Lanes d(0.0);
+        for (int r = k; r < end; ++r) d += A[r][k] * A[r][c];
+        const Lanes factor = 2.0 * d / v_norm;
+        for (int r = k; r < end; ++r) A[r][c] = select(reflect, A[r][c] - factor * A[r][k], A[r][c]);
+      }
+      Lanes d(0.0);
+      for (int r = k; r < end; ++r) d += A[r][k] * b[r];
+      const Lanes factor = 2.0 * d / v_norm;
+      for (int r = k; r < end; ++r) b[r] = select(reflect, b[r] - factor * A[r][k], b[r]);
+    }
+    A[k][k] = alpha;  // R's diagonal
+  }
+  Lanes largest(0.0);
+  for (int k = 0; k < m; ++k) largest = max(largest, abs(A[k][k]));
+  Lanes solution[kDof];
+  for (int k = m - 1; k >= 0; --k) {
+    solved = solved && abs(A[k][k]) > 1e-15 * largest;  // refine() returns false where not
+    Lanes total = b[k];
+    for (int c = k + 1; c < m; ++c) total -= A[k][c] * solution[c];
+    solution[k] = total / A[k][k];
+  }
+  m = 0;
+  for (int j = 0; j < kDof; ++j) {
+    if (!fixed[j]) step[j] = solution[m++];
+  }
+  return solved;
+}
+
+}  // namespace newton
+
+// refine() per lane (see the convention above) from q (in place; each lane ends as its best
+// iterate) towards `target` (DH frame 0 -> n), for a chain of kDof joints whose constant frames
+// have the shapes `shape`. Lanes outside `active` take no part (q is left there as it is, the
+// errors returned are not meaningful); give them a finite start, as their arithmetic still runs.
+inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape& shape,
+                                            const Frame& target, JointsT<Lanes>& q,
+                                            const JointMask& fixed, double tolerance,
+                                            const newton::Settings& settings = {},
+                                            Mask active = uniform(true)) {
+  using namespace newton;
+  // An iterate: the chain's frames there, its error twist, errors and squared error size.
+  struct Iterate {
+    FrameT<Lanes> frames[kDof + 1];
+    Lanes e[6];
+    PoseErrorT<Lanes> error;
+    Lanes size;
+  };
+  JointMotions<Lanes> motions;
+  const auto evaluate = [&](const JointsT<Lanes>& at, Iterate& out) {
+    joint_motions(chain, at.data(), motions);
+    chain_frames(chain, shape, motions, out.frames);
+    out.error = error_twist(out.frames[kDof], target, out.e);
+    out.size = out.error.position * out.error.position + out.error.rotation * out.error.rotation;
+  };
+  Iterate now, trial, candidate;
+  Lanes J[6 * kDof], step[kDof];
+  JointsT<Lanes> trial_q, candidate_q;
+  const double goal = kRefineFraction * tolerance;
+  const JointsT<Lanes> start = q;
+  evaluate(q, now);
+  JointsT<Lanes> best = q;
+  PoseErrorT<Lanes> best_error = now.error;
+  Lanes best_size = now.size;
+  const double floor = (goal / kMaxJointStep) * (goal / kMaxJointStep);
+  Lanes damping(std::max(floor, settings.damping_start));
+  Lanes evaluations(1.0);  // counts, exact in doubles
+  const double budget = settings.budget;
+  const double growth_squared = settings.growth * settings.growth;
+  const Lanes raised_damping(kDampingStart + floor);
+  // A lane is running until refine() would have returned for its start; lanes that stopped
+  // still compute (their values unused), and only their best iterate is kept.
+  Mask running = active;
+  Mask polishing = uniform(false);
+  for (int iteration = 0; iteration < kMaxSteps; ++iteration) {
+    running = running && !(evaluations >= budget || now.size == 0.0);
+    if (!any(running)) break;
+    polishing = polishing || (now.error.position <= goal && now.error.rotation <= goal);
+    jacobian(chain, now.frames, J);
+    // refine()'s inner loop: each lane solves, tries and, while rejected, damps and solves again
+    Mask waiting = running;  // no step taken yet, not given up
+    Mask taken = uniform(false);
+    bool first_try = true;
+    while (any(waiting)) {
+      const Mask solved = waiting && least_squares_lanes(J, now.e, fixed, damping, step);
+      Mask accepted = uniform(false);
+      if (any(solved)) {
+        Lanes longest(0.0);
+        for (int a = 0; a < kDof; ++a) longest = max(longest, abs(step[a]));
+        const Lanes shrink = select(longest > kMaxJointStep, kMaxJointStep / longest, Lanes(1.0));
+        for (int a = 0; a < kDof; ++a) candidate_q[a] = q[a] + shrink * step[a];
+        evaluate(candidate_q, candidate);
+        evaluations = select(solved, evaluations + 1.0, evaluations);
+        accepted = solved && candidate.size <= growth_squared * now.size;
+        if (first_try) {  // lanes not accepted write theirs when they are
+          trial = candidate;
+          trial_q = candidate_q;
+        } else {
+          for (int a = 0; a < kDof; ++a) trial_q[a] = select(accepted, candidate_q[a], trial_q[a]);
+          for (int f = 0; f <= kDof; ++f) {
+            for (int r = 0; r < 3; ++r) {
+              for (int c = 0; c < 3; ++c) {
+                trial.frames[f].R[r][c] =
+                    select(accepted, candidate.frames[f].R[r][c], trial.frames[f].R[r][c]);
+              }
+              trial.frames[f].p[r] = select(accepted, candidate.frames[f].p[r], trial.frames[f].p[r]);
+            }
+          }
+          for (int r = 0; r < 6; ++r) trial.e[r] = select(accepted, candidate.e[r], trial.e[r]);
+          trial.error.position = select(accepted, candidate.error.position, trial.error.position);
+          trial.error.rotation = select(accepted, candidate.error.rotation, trial.error.rotation);
+          trial.size = select(accepted, candidate.size, trial.size);
+        }
+      }
+      first_try = false;
+      taken = taken || accepted;
+      const Mask rejected = waiting && !accepted;
+      damping = select(rejected, max(100.0 * damping, raised_damping), damping);
+      const Mask given_up = rejected && (damping > kDampingLimit || evaluations >= budget);
+      waiting = rejected && !given_up;
+    }
+    running = running && taken;  // refine() stops where no step was taken
+    const Mask no_gain = !(trial.size * kPolishGain <= now.size);
+    const Mask stalled = trial.size <= now.size && no_gain;
+    const Mask stop =
+        running && ((polishing && no_gain) || (settings.stop_on_stall && stalled));
+    // at the rounding of the arithmetic: the trial is kept if it is the best
+    const Mask kept = stop && trial.size < best_size;
+    for (int a = 0; a < kDof; ++a) best[a] = select(kept, trial_q[a], best[a]);
+    best_error.position = select(kept, trial.error.position, best_error.position);
+    best_error.rotation = select(kept, trial.error.rotation, best_error.rotation);
+    best_size = select(kept, trial.size, best_size);
+    running = running && !stop;
+    if (!any(running)) break;
+    // the step taken (lanes that stopped never step again: their iterate is not used)
+    q = trial_q;
+    now = trial;
+    damping = select(damping > kDampingStart, max(0.1 * damping, Lanes(floor)), Lanes(floor));
+    const Mask better = running && now.size < best_size;
+    for (int a = 0; a < kDof; ++a) best[a] = select(better, q[a], best[a]);
+    best_error.position = select(better, now.error.position, best_error.position);
+    best_error.rotation = select(better, now.error.rotation, best_error.rotation);
+    best_size = select(better, now.size, best_size);
+  }
+  for (int a = 0; a < kDof; ++a) q[a] = select(active, best[a], start[a]);
+  return best_error;
+}
+
+}  // namespace dhkin

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "dhkin/chain.hpp"
 #include "dhkin/family.hpp"
@@ -72,7 +73,9 @@ DHKIN_INLINE Mask least_squares_lanes(const Lanes* J, const Lanes* e, const Join
         Lanes d(0.0);
         for (int r = k; r < end; ++r) d += A[r][k] * A[r][c];
         const Lanes factor = 2.0 * d / v_norm;
-        for (int r = k; r < end; ++r) A[r][c] = select(reflect, A[r][c] - factor * A[r][k], A[r][c]);
+        for (int r = k; r < end; ++r) {
+          A[r][c] = select(reflect, A[r][c] - factor * A[r][k], A[r][c]);
+        }
       }
       Lanes d(0.0);
       for (int r = k; r < end; ++r) d += A[r][k] * b[r];
@@ -115,6 +118,22 @@ inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape
     Lanes e[6];
     PoseErrorT<Lanes> error;
     Lanes size;
+
+    // other's values in the lanes m
+    void take(Mask m, const Iterate& other) {
+      for (int f = 0; f <= kDof; ++f) {
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) {
+            frames[f].R[r][c] = select(m, other.frames[f].R[r][c], frames[f].R[r][c]);
+          }
+          frames[f].p[r] = select(m, other.frames[f].p[r], frames[f].p[r]);
+        }
+      }
+      for (int r = 0; r < 6; ++r) e[r] = select(m, other.e[r], e[r]);
+      error.position = select(m, other.error.position, error.position);
+      error.rotation = select(m, other.error.rotation, error.rotation);
+      size = select(m, other.size, size);
+    }
   };
   JointMotions<Lanes> motions;
   const auto evaluate = [&](const JointsT<Lanes>& at, Iterate& out) {
@@ -123,15 +142,19 @@ inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape
     out.error = error_twist(out.frames[kDof], target, out.e);
     out.size = out.error.position * out.error.position + out.error.rotation * out.error.rotation;
   };
-  Iterate now, trial, candidate;
+  // the current iterate, the step taken from it and the step just tried: swapped, not copied
+  Iterate buffers[3];
+  Iterate* now = &buffers[0];
+  Iterate* trial = &buffers[1];
+  Iterate* candidate = &buffers[2];
   Lanes J[6 * kDof], step[kDof];
   JointsT<Lanes> trial_q, candidate_q;
   const double goal = kRefineFraction * tolerance;
   const JointsT<Lanes> start = q;
-  evaluate(q, now);
+  evaluate(q, *now);
   JointsT<Lanes> best = q;
-  PoseErrorT<Lanes> best_error = now.error;
-  Lanes best_size = now.size;
+  PoseErrorT<Lanes> best_error = now->error;
+  Lanes best_size = now->size;
   const double floor = (goal / kMaxJointStep) * (goal / kMaxJointStep);
   Lanes damping(std::max(floor, settings.damping_start));
   Lanes evaluations(1.0);  // counts, exact in doubles
@@ -143,43 +166,31 @@ inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape
   Mask running = active;
   Mask polishing = uniform(false);
   for (int iteration = 0; iteration < kMaxSteps; ++iteration) {
-    running = running && !(evaluations >= budget || now.size == 0.0);
+    running = running && !(evaluations >= budget || now->size == 0.0);
     if (!any(running)) break;
-    polishing = polishing || (now.error.position <= goal && now.error.rotation <= goal);
-    jacobian(chain, now.frames, J);
+    polishing = polishing || (now->error.position <= goal && now->error.rotation <= goal);
+    jacobian(chain, now->frames, J);
     // refine()'s inner loop: each lane solves, tries and, while rejected, damps and solves again
     Mask waiting = running;  // no step taken yet, not given up
     Mask taken = uniform(false);
     bool first_try = true;
     while (any(waiting)) {
-      const Mask solved = waiting && least_squares_lanes(J, now.e, fixed, damping, step);
+      const Mask solved = waiting && least_squares_lanes(J, now->e, fixed, damping, step);
       Mask accepted = uniform(false);
       if (any(solved)) {
         Lanes longest(0.0);
         for (int a = 0; a < kDof; ++a) longest = max(longest, abs(step[a]));
         const Lanes shrink = select(longest > kMaxJointStep, kMaxJointStep / longest, Lanes(1.0));
         for (int a = 0; a < kDof; ++a) candidate_q[a] = q[a] + shrink * step[a];
-        evaluate(candidate_q, candidate);
+        evaluate(candidate_q, *candidate);
         evaluations = select(solved, evaluations + 1.0, evaluations);
-        accepted = solved && candidate.size <= growth_squared * now.size;
+        accepted = solved && candidate->size <= growth_squared * now->size;
         if (first_try) {  // lanes not accepted write theirs when they are
-          trial = candidate;
+          std::swap(trial, candidate);
           trial_q = candidate_q;
         } else {
           for (int a = 0; a < kDof; ++a) trial_q[a] = select(accepted, candidate_q[a], trial_q[a]);
-          for (int f = 0; f <= kDof; ++f) {
-            for (int r = 0; r < 3; ++r) {
-              for (int c = 0; c < 3; ++c) {
-                trial.frames[f].R[r][c] =
-                    select(accepted, candidate.frames[f].R[r][c], trial.frames[f].R[r][c]);
-              }
-              trial.frames[f].p[r] = select(accepted, candidate.frames[f].p[r], trial.frames[f].p[r]);
-            }
-          }
-          for (int r = 0; r < 6; ++r) trial.e[r] = select(accepted, candidate.e[r], trial.e[r]);
-          trial.error.position = select(accepted, candidate.error.position, trial.error.position);
-          trial.error.rotation = select(accepted, candidate.error.rotation, trial.error.rotation);
-          trial.size = select(accepted, candidate.size, trial.size);
+          trial->take(accepted, *candidate);
         }
       }
       first_try = false;
@@ -190,27 +201,27 @@ inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape
       waiting = rejected && !given_up;
     }
     running = running && taken;  // refine() stops where no step was taken
-    const Mask no_gain = !(trial.size * kPolishGain <= now.size);
-    const Mask stalled = trial.size <= now.size && no_gain;
+    const Mask no_gain = !(trial->size * kPolishGain <= now->size);
+    const Mask stalled = trial->size <= now->size && no_gain;
     const Mask stop =
         running && ((polishing && no_gain) || (settings.stop_on_stall && stalled));
     // at the rounding of the arithmetic: the trial is kept if it is the best
-    const Mask kept = stop && trial.size < best_size;
+    const Mask kept = stop && trial->size < best_size;
     for (int a = 0; a < kDof; ++a) best[a] = select(kept, trial_q[a], best[a]);
-    best_error.position = select(kept, trial.error.position, best_error.position);
-    best_error.rotation = select(kept, trial.error.rotation, best_error.rotation);
-    best_size = select(kept, trial.size, best_size);
+    best_error.position = select(kept, trial->error.position, best_error.position);
+    best_error.rotation = select(kept, trial->error.rotation, best_error.rotation);
+    best_size = select(kept, trial->size, best_size);
     running = running && !stop;
     if (!any(running)) break;
     // the step taken (lanes that stopped never step again: their iterate is not used)
     q = trial_q;
-    now = trial;
+    std::swap(now, trial);
     damping = select(damping > kDampingStart, max(0.1 * damping, Lanes(floor)), Lanes(floor));
-    const Mask better = running && now.size < best_size;
+    const Mask better = running && now->size < best_size;
     for (int a = 0; a < kDof; ++a) best[a] = select(better, q[a], best[a]);
-    best_error.position = select(better, now.error.position, best_error.position);
-    best_error.rotation = select(better, now.error.rotation, best_error.rotation);
-    best_size = select(better, now.size, best_size);
+    best_error.position = select(better, now->error.position, best_error.position);
+    best_error.rotation = select(better, now->error.rotation, best_error.rotation);
+    best_size = select(better, now->size, best_size);
   }
   for (int a = 0; a < kDof; ++a) q[a] = select(active, best[a], start[a]);
   return best_error;

@@ -3,11 +3,14 @@
 // extra roots placed.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "dhkin/continuation.hpp"
 #include "dhkin/newton.hpp"
 #include "dhkin/plan.hpp"
+#include "dhkin/refine_lanes_exact.hpp"
 
 namespace dhkin {
 
@@ -160,22 +163,72 @@ struct Point {
   Joints q{};
 };
 
-inline Point held_member(const Plan& plan, const Frame& T_dh, const Frame& T_at,
-                         const Joints& base, int b, double t, double clamp, double tolerance,
-                         Candidates& found) {
-  Point point;
+// How a held member is refined: kPolishBudget evaluations, Newton's steps, stopping at a stall.
+inline newton::Settings held_settings() { return {kPolishBudget, newton::kGrowth, 0.0, true}; }
+
+// The member of branch b's family with the seed's free wrist joint at t, wrapped, in point.q
+// (point.t = t); false where the family has no member there (point.q is then left as it is).
+inline bool family_member(const Plan& plan, const Frame& T_dh, const Joints& base, int b,
+                          double t, double clamp, Candidates& found, Point& point) {
   point.t = t;
   Joints moved = base;
   moved[plan.free_wrist] = t;
   plan.solve_family(T_dh, moved, kWrist, clamp, found, b, true);
-  if (!found.valid[b] || !finite(found.q[b])) return point;
+  if (!found.valid[b] || !finite(found.q[b])) return false;
   point.q = found.q[b];
   plan.wrap_revolute(point.q);
+  return true;
+}
+
+// The point at t: its member refined with the free wrist joint held.
+inline Point held_member(const Plan& plan, const Frame& T_dh, const Frame& T_at,
+                         const Joints& base, int b, double t, double clamp, double tolerance,
+                         Candidates& found) {
+  Point point;
+  if (!family_member(plan, T_dh, base, b, t, clamp, found, point)) return point;
   const double r = refine(plan.chain, T_at, point.q, plan.free_joints(kWrist), tolerance,
-                          {kPolishBudget, newton::kGrowth, 0.0, true})
+                          held_settings())
                        .largest();
   point.squared = r * r;
   return point;
+}
+
+// The refinement of held_member for the points whose member `exists`, kLanes at a time
+// (refine_lanes_exact: the same bits as one by one).
+template <std::size_t N>
+inline void refine_held(const Plan& plan, const Frame& T_at, double tolerance,
+                        const std::array<bool, N>& exists, std::array<Point, N>& points) {
+  const Chain& chain = plan.chain;
+  const JointMask held = plan.free_joints(kWrist);
+  if (chain.dof() != kDof) {
+    for (std::size_t k = 0; k < N; ++k) {
+      if (!exists[k]) continue;
+      const double r = refine(chain, T_at, points[k].q, held, tolerance, held_settings()).largest();
+      points[k].squared = r * r;
+    }
+    return;
+  }
+  const ChainShape shape(chain);
+  for (std::size_t first = 0; first < N; first += kLanes) {
+    const int count = static_cast<int>(std::min<std::size_t>(kLanes, N - first));
+    JointsT<Lanes> q;
+    Mask active = uniform(false);
+    for (int l = 0; l < count; ++l) {
+      // a point without a member takes no part (its start {}, a finite one)
+      for (int j = 0; j < kDof; ++j) set_lane(q[j], l, points[first + l].q[j]);
+      set_lane(active, l, exists[first + l]);
+    }
+    if (!any(active)) continue;
+    const PoseErrorT<Lanes> errors =
+        refine_lanes_exact(chain, shape, T_at, q, held, tolerance, held_settings(), active);
+    for (int l = 0; l < count; ++l) {
+      if (!exists[first + l]) continue;
+      Point& point = points[first + l];
+      for (int j = 0; j < kDof; ++j) point.q[j] = lane(q[j], l);
+      const double r = lane(errors, l).largest();
+      point.squared = r * r;
+    }
+  }
 }
 
 }  // namespace valley
@@ -196,10 +249,12 @@ inline void valley_roots(const Plan& plan, const Frame& T_dh, const Frame& T_at,
   Candidates found;
   std::array<Point, kValleyGrid> grid;
   const double start = regular_q[plan.free_wrist], step = kTwoPi / kValleyGrid;
-  for (int k = 0; k < kValleyGrid; ++k) {
-    grid[k] = valley::held_member(plan, T_dh, T_at, regular_q, b, start + k * step, clamp,
-                                  tolerance, found);
+  std::array<bool, kValleyGrid> exists;
+  for (int k = 0; k < kValleyGrid; ++k) {  // held members: closed forms, then refined in lanes
+    exists[k] =
+        valley::family_member(plan, T_dh, regular_q, b, start + k * step, clamp, found, grid[k]);
   }
+  valley::refine_held(plan, T_at, tolerance, exists, grid);
   const JointMask none{};
   for (int k = 0; k < kValleyGrid; ++k) {
     Point left = grid[(k + kValleyGrid - 1) % kValleyGrid], middle = grid[k],

@@ -49,62 +49,67 @@ constexpr double kDampingLimit = 1e12;
 
 // The step minimising |J step - e|^2 + damping * sum_j (|J_j| step_j)^2 over the free joints
 // (fixed ones get step 0), by Householder QR of the stacked system [J; sqrt(damping) diag(|J_j|)].
-// J is 6 x kDof row-major. False when the free columns are rank deficient.
-inline bool least_squares(const double* J, const double* e, const JointMask& fixed,
-                          double damping, double* step) {
+// J is 6 x kDof row-major. Per lane for V = Lanes (refine_lanes_exact.hpp: each lane its own
+// damping, the same operations in the same order as for a double). Returns where the free
+// columns are of full rank; elsewhere `step` is not meaningful.
+template <class V>
+DHKIN_INLINE MaskOf<V> least_squares(const V* J, const V* e, const JointMask& fixed, V damping,
+                                     V* step) {
   constexpr int rows = 6 + kDof;
-  double A[rows][kDof];
-  double b[rows];
-  for (int j = 0; j < kDof; ++j) step[j] = 0.0;
+  V A[rows][kDof];
+  V b[rows];
+  for (int j = 0; j < kDof; ++j) step[j] = V(0.0);
   for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < kDof; ++c) A[r][c] = 0.0;
-    b[r] = r < 6 ? e[r] : 0.0;
+    for (int c = 0; c < kDof; ++c) A[r][c] = V(0.0);
+    b[r] = r < 6 ? e[r] : V(0.0);
   }
   int m = 0;  // free columns
   for (int j = 0; j < kDof; ++j) {
     if (fixed[j]) continue;
-    double column = 0.0;
+    V column(0.0);
     for (int r = 0; r < 6; ++r) {
       A[r][m] = J[r * kDof + j];
       column += J[r * kDof + j] * J[r * kDof + j];
     }
-    A[6 + m][m] = std::sqrt(damping * column);
+    A[6 + m][m] = sqrt(damping * column);
     ++m;
   }
+  MaskOf<V> solved = every_lane<V>(true);
   for (int k = 0; k < m; ++k) {  // Householder reflection of column k below the diagonal
     // Column k is zero below row 6 + k: a damping row 6 + c holds only its diagonal entry until
     // reflection c (c >= k) reaches it, and a fixed joint's damping row stays zero. The sums over
     // rows k .. 6 + k are those over every row below k with their zero terms dropped (the same
     // values, short of the sign of a zero), and the reflection leaves the rows below unchanged.
     const int end = 7 + k;
-    double length = 0.0;
+    V length(0.0);
     for (int r = k; r < end; ++r) length += A[r][k] * A[r][k];
-    length = std::sqrt(length);
-    if (length == 0.0) return false;
-    const double alpha = A[k][k] >= 0.0 ? -length : length;
+    length = sqrt(length);
+    solved = solved && !(length == 0.0);
+    const V alpha = select(A[k][k] >= 0.0, -length, length);
     A[k][k] -= alpha;
-    double v_norm = 0.0;
+    V v_norm(0.0);
     for (int r = k; r < end; ++r) v_norm += A[r][k] * A[r][k];
-    if (v_norm > 0.0) {
+    const MaskOf<V> reflect = v_norm > 0.0;
+    if (any(reflect)) {
       for (int c = k + 1; c < m; ++c) {
-        double d = 0.0;
+        V d(0.0);
         for (int r = k; r < end; ++r) d += A[r][k] * A[r][c];
-        const double factor = 2.0 * d / v_norm;
-        for (int r = k; r < end; ++r) A[r][c] -= factor * A[r][k];
+        const V factor = 2.0 * d / v_norm;
+        for (int r = k; r < end; ++r) A[r][c] = select(reflect, A[r][c] - factor * A[r][k], A[r][c]);
       }
-      double d = 0.0;
+      V d(0.0);
       for (int r = k; r < end; ++r) d += A[r][k] * b[r];
-      const double factor = 2.0 * d / v_norm;
-      for (int r = k; r < end; ++r) b[r] -= factor * A[r][k];
+      const V factor = 2.0 * d / v_norm;
+      for (int r = k; r < end; ++r) b[r] = select(reflect, b[r] - factor * A[r][k], b[r]);
     }
     A[k][k] = alpha;  // R's diagonal
   }
-  double largest = 0.0;
-  for (int k = 0; k < m; ++k) largest = std::max(largest, std::abs(A[k][k]));
-  double solution[kDof];
+  V largest(0.0);
+  for (int k = 0; k < m; ++k) largest = max(largest, abs(A[k][k]));
+  V solution[kDof];
   for (int k = m - 1; k >= 0; --k) {
-    if (!(std::abs(A[k][k]) > 1e-15 * largest)) return false;
-    double total = b[k];
+    solved = solved && abs(A[k][k]) > 1e-15 * largest;  // the rank test
+    V total = b[k];
     for (int c = k + 1; c < m; ++c) total -= A[k][c] * solution[c];
     solution[k] = total / A[k][k];
   }
@@ -112,7 +117,7 @@ inline bool least_squares(const double* J, const double* e, const JointMask& fix
   for (int j = 0; j < kDof; ++j) {
     if (!fixed[j]) step[j] = solution[m++];
   }
-  return true;
+  return solved;
 }
 
 struct Settings {

@@ -30,77 +30,6 @@
 
 namespace dhkin {
 
-namespace newton {
-
-// least_squares (newton.hpp) per lane, each lane with its own damping: the same stacked system,
-// the same Householder reflections and back substitution, with refine()'s early returns as a
-// mask. Returns where the free columns were of full rank (elsewhere `step` is not meaningful).
-DHKIN_INLINE Mask least_squares_lanes(const Lanes* J, const Lanes* e, const JointMask& fixed,
-                                      Lanes damping, Lanes* step) {
-  constexpr int rows = 6 + kDof;
-  Lanes A[rows][kDof];
-  Lanes b[rows];
-  for (int j = 0; j < kDof; ++j) step[j] = Lanes(0.0);
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < kDof; ++c) A[r][c] = Lanes(0.0);
-    b[r] = r < 6 ? e[r] : Lanes(0.0);
-  }
-  int m = 0;  // free columns
-  for (int j = 0; j < kDof; ++j) {
-    if (fixed[j]) continue;
-    Lanes column(0.0);
-    for (int r = 0; r < 6; ++r) {
-      A[r][m] = J[r * kDof + j];
-      column += J[r * kDof + j] * J[r * kDof + j];
-    }
-    A[6 + m][m] = sqrt(damping * column);
-    ++m;
-  }
-  Mask solved = uniform(true);
-  for (int k = 0; k < m; ++k) {  // Householder reflection of column k (rows k .. 6 + k)
-    const int end = 7 + k;
-    Lanes length(0.0);
-    for (int r = k; r < end; ++r) length += A[r][k] * A[r][k];
-    length = sqrt(length);
-    solved = solved && !(length == 0.0);  // refine() returns false here
-    const Lanes alpha = select(A[k][k] >= 0.0, -length, length);
-    A[k][k] -= alpha;
-    Lanes v_norm(0.0);
-    for (int r = k; r < end; ++r) v_norm += A[r][k] * A[r][k];
-    const Mask reflect = v_norm > 0.0;
-    if (any(reflect)) {
-      for (int c = k + 1; c < m; ++c) {
-        Lanes d(0.0);
-        for (int r = k; r < end; ++r) d += A[r][k] * A[r][c];
-        const Lanes factor = 2.0 * d / v_norm;
-        for (int r = k; r < end; ++r) {
-          A[r][c] = select(reflect, A[r][c] - factor * A[r][k], A[r][c]);
-        }
-      }
-      Lanes d(0.0);
-      for (int r = k; r < end; ++r) d += A[r][k] * b[r];
-      const Lanes factor = 2.0 * d / v_norm;
-      for (int r = k; r < end; ++r) b[r] = select(reflect, b[r] - factor * A[r][k], b[r]);
-    }
-    A[k][k] = alpha;  // R's diagonal
-  }
-  Lanes largest(0.0);
-  for (int k = 0; k < m; ++k) largest = max(largest, abs(A[k][k]));
-  Lanes solution[kDof];
-  for (int k = m - 1; k >= 0; --k) {
-    solved = solved && abs(A[k][k]) > 1e-15 * largest;  // refine() returns false where not
-    Lanes total = b[k];
-    for (int c = k + 1; c < m; ++c) total -= A[k][c] * solution[c];
-    solution[k] = total / A[k][k];
-  }
-  m = 0;
-  for (int j = 0; j < kDof; ++j) {
-    if (!fixed[j]) step[j] = solution[m++];
-  }
-  return solved;
-}
-
-}  // namespace newton
 
 // refine() per lane (see the convention above) from q (in place; each lane ends as its best
 // iterate) towards `target` (DH frame 0 -> n), for a chain of kDof joints whose constant frames
@@ -175,7 +104,7 @@ inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape
     Mask taken = uniform(false);
     bool first_try = true;
     while (any(waiting)) {
-      const Mask solved = waiting && least_squares_lanes(J, now->e, fixed, damping, step);
+      const Mask solved = waiting && least_squares(J, now->e, fixed, damping, step);
       Mask accepted = uniform(false);
       if (any(solved)) {
         Lanes longest(0.0);

@@ -24,6 +24,7 @@
 #include "dhkin/expand.hpp"
 #include "dhkin/pipeline.hpp"
 #include "dhkin/plan.hpp"
+#include "dhkin/refine_lanes_exact.hpp"
 #include "dhkin/pose.hpp"
 #include "dhkin/right_svd.hpp"
 #include "dhkin/rows.hpp"
@@ -820,6 +821,71 @@ class ChainModel {
     }
   }
 
+  // Newton on the chain (refine(), newton.hpp) from each row of q (N, 6; in place, each row ends
+  // as its best iterate) towards its target (N, 4, 4: DH frame 0 -> the chain's tail), joints
+  // `fixed` held, with refine()'s settings; errors (N, 2) receives each row's position and
+  // rotation error. With `lanes`, the rows go kLanes at a time through refine_lanes_exact (the
+  // last group's spare lanes inactive), which gives each row the bits refine() gives it alone:
+  // the two roads exist side by side so that tests can hold them to that.
+  void refine(Output<double, nb::ndim<2>> q, Input<double, nb::shape<-1, 4, 4>> targets,
+              Input<bool, nb::shape<dhkin::kDof>> fixed, double tolerance, int budget,
+              double growth, double damping_start, bool stop_on_stall, bool lanes,
+              Output<double, nb::shape<-1, 2>> errors) const {
+    using dhkin::kDof;
+    using dhkin::kLanes;
+    const std::size_t n = q.shape(0);
+    if (chain_.dof() != kDof || q.shape(1) != static_cast<std::size_t>(kDof) ||
+        targets.shape(0) != n || errors.shape(0) != n) {
+      throw std::invalid_argument("refine: expected a chain of 6 joints, q (N, 6), targets "
+                                  "(N, 4, 4) and errors (N, 2)");
+    }
+    dhkin::JointMask held{};
+    for (int j = 0; j < kDof; ++j) held[j] = fixed.data()[j];
+    const dhkin::newton::Settings settings{budget, growth, damping_start, stop_on_stall};
+    const dhkin::ChainShape shape(chain_);
+    nb::gil_scoped_release release;
+    double* rows = q.data();
+    if (!lanes) {
+      for (std::size_t i = 0; i < n; ++i) {
+        dhkin::Joints row;
+        std::memcpy(row.data(), rows + kDof * i, sizeof row);
+        const dhkin::PoseError error = dhkin::refine(
+            chain_, dhkin::raw_frame(targets.data() + 16 * i), row, held, tolerance, settings);
+        std::memcpy(rows + kDof * i, row.data(), sizeof row);
+        errors.data()[2 * i] = error.position;
+        errors.data()[2 * i + 1] = error.rotation;
+      }
+      return;
+    }
+    // one target for every lane of a group: refine_lanes_exact takes one, so each group holds
+    // the rows of one target (rows with another target start a new group)
+    std::size_t first = 0;
+    while (first < n) {
+      std::size_t end = first + 1;
+      const double* target = targets.data() + 16 * first;
+      while (end < n && end - first < static_cast<std::size_t>(kLanes) &&
+             std::memcmp(targets.data() + 16 * end, target, 16 * sizeof(double)) == 0) {
+        ++end;
+      }
+      dhkin::JointsT<dhkin::Lanes> starts;
+      dhkin::Mask active = dhkin::uniform(false);
+      for (int l = 0; l < kLanes; ++l) {
+        const std::size_t row = l < static_cast<int>(end - first) ? first + l : first;
+        for (int j = 0; j < kDof; ++j) dhkin::set_lane(starts[j], l, rows[kDof * row + j]);
+        dhkin::set_lane(active, l, row == first + l);
+      }
+      const dhkin::PoseErrorT<dhkin::Lanes> error = dhkin::refine_lanes_exact(
+          chain_, shape, dhkin::raw_frame(target), starts, held, tolerance, settings, active);
+      for (std::size_t i = first; i < end; ++i) {
+        const int l = static_cast<int>(i - first);
+        for (int j = 0; j < kDof; ++j) rows[kDof * i + j] = dhkin::lane(starts[j], l);
+        errors.data()[2 * i] = dhkin::lane(error.position, l);
+        errors.data()[2 * i + 1] = dhkin::lane(error.rotation, l);
+      }
+      first = end;
+    }
+  }
+
  private:
   dhkin::Chain chain_;
 };
@@ -922,7 +988,9 @@ NB_MODULE(_core, m) {
                     Input<double, nb::shape<4, 4>>>(),
            "before"_a, "revolute"_a, "direction"_a, "offset"_a, "tail"_a)
       .def_prop_ro("dof", &ChainModel::dof)
-      .def("fk", &ChainModel::fk, "q"_a, "out"_a);
+      .def("fk", &ChainModel::fk, "q"_a, "out"_a)
+      .def("refine", &ChainModel::refine, "q"_a, "targets"_a, "fixed"_a, "tolerance"_a,
+           "budget"_a, "growth"_a, "damping_start"_a, "stop_on_stall"_a, "lanes"_a, "errors"_a);
 
   // pooled: a dropped Answer's Python object is kept for the next one (no allocation, no entry in
   // nanobind's instance map per single call)

@@ -31,6 +31,10 @@ class Chain:
     @property
     def dof(self) -> int: ...
     def fk(self, q: NDArray[np.float64], out: NDArray[np.float64]) -> None: ...
+    def refine(self, q: NDArray[np.float64], targets: NDArray[np.float64],
+               fixed: NDArray[np.bool_], tolerance: float, budget: int, growth: float,
+               damping_start: float, stop_on_stall: bool, lanes: bool,
+               errors: NDArray[np.float64]) -> None: ...
 
 NUMERICAL_LAMBDA_FLOOR: float
 

@@ -157,9 +157,9 @@ inline Joints twin_start(const Joints& q, const Joints& weakest, int k) {
   return trial;
 }
 
-// Refines the twin search's starts from `first` on, up to kLanes of them, in lanes at once:
-// refine_lanes_exact gives each the bits refine() gives it alone, so the cached roots and errors
-// are those the search would have refined one by one.
+// Refines the twin search's starts from `first` on, up to kLanes of them, in lanes at once (a
+// plan's chain: kDof joints): refine_lanes_exact gives each the bits refine() gives it alone, so
+// the cached roots and errors are those the search would have refined one by one.
 inline void refine_twin_starts(const Chain& chain, const Frame& target, double tolerance,
                                int first, TwinSearch& search) {
   const int count = std::min(kLanes, TwinSearch::kStarts - first);
@@ -194,17 +194,7 @@ inline bool find_twin(const Chain& chain, const Frame& target, const Joints& q, 
     search.refined = 0;
   }
   for (int start = 0; start < TwinSearch::kStarts; ++start) {
-    if (start == search.refined) {
-      if (chain.dof() == kDof) {
-        refine_twin_starts(chain, target, tolerance, start, search);
-      } else {
-        Joints& trial = search.root[start];
-        trial = twin_start(q, search.weakest, start);
-        refine(chain, target, trial, JointMask{}, tolerance);
-        search.error[start] = check(chain, trial.data(), target);
-        ++search.refined;
-      }
-    }
+    if (start == search.refined) refine_twin_starts(chain, target, tolerance, start, search);
     out = search.root[start];
     const PoseError& error = search.error[start];
     if (error.within(tolerance) && apart(out, q, distinct)) {

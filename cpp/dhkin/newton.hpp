@@ -120,6 +120,22 @@ DHKIN_INLINE MaskOf<V> least_squares(const V* J, const V* e, const JointMask& fi
   return solved;
 }
 
+// Per lane the best iterate of a Newton run in lanes (refine_lanes, refine_lanes_exact): its
+// joint values, errors and squared error size, replaced lane by lane.
+struct BestIterates {
+  JointsT<Lanes> q;
+  PoseErrorT<Lanes> error;
+  Lanes size;
+
+  // The iterate at (errors e, squared size) in the lanes m.
+  void take(Mask m, const JointsT<Lanes>& at, const PoseErrorT<Lanes>& e, Lanes squared) {
+    for (int a = 0; a < kDof; ++a) q[a] = select(m, at[a], q[a]);
+    error.position = select(m, e.position, error.position);
+    error.rotation = select(m, e.rotation, error.rotation);
+    size = select(m, squared, size);
+  }
+};
+
 struct Settings {
   int budget = kBudget;       // chain evaluations
   double growth = kGrowth;    // kGrowth: Newton; kMonotone: a monotone descent

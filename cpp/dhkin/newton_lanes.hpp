@@ -129,9 +129,7 @@ inline LaneRefinement refine_lanes(const Chain& chain, const ChainShape& shape,
     out.size = out.error.position * out.error.position + out.error.rotation * out.error.rotation;
   };
   evaluate(q, *now);
-  JointsT<Lanes> best = q;
-  PoseErrorT<Lanes> best_error = now->error;
-  Lanes best_size = now->size;
+  BestIterates best{q, now->error, now->size};
   Mask polishing = uniform(false), settled = uniform(false), running = active;
   bool factored = false;
   for (int iteration = 0; iteration < kMaxSteps && any(running); ++iteration) {
@@ -155,24 +153,16 @@ inline LaneRefinement refine_lanes(const Chain& chain, const ChainShape& shape,
     const Mask taken = qr.full_rank && trial_size <= (kGrowth * kGrowth) * now->size;
     // at the rounding of the arithmetic: the lane stops, keeping the trial if it is the best
     const Mask stop = running && taken && polishing && !(trial_size * kPolishGain <= now->size);
-    const Mask kept = stop && trial_size < best_size;
-    for (int a = 0; a < kDof; ++a) best[a] = select(kept, trial[a], best[a]);
-    best_error.position = select(kept, trial_at->error.position, best_error.position);
-    best_error.rotation = select(kept, trial_at->error.rotation, best_error.rotation);
-    best_size = select(kept, trial_size, best_size);
+    best.take(stop && trial_size < best.size, trial, trial_at->error, trial_size);
     settled = settled || stop;
     running = running && taken && !stop;  // a rejected step ends the lane unsettled
     if (!any(running)) break;
     q = trial;
     std::swap(now, trial_at);
-    const Mask better = running && now->size < best_size;
-    for (int a = 0; a < kDof; ++a) best[a] = select(better, q[a], best[a]);
-    best_error.position = select(better, now->error.position, best_error.position);
-    best_error.rotation = select(better, now->error.rotation, best_error.rotation);
-    best_size = select(better, now->size, best_size);
+    best.take(running && now->size < best.size, q, now->error, now->size);
   }
-  for (int a = 0; a < kDof; ++a) q[a] = select(active, best[a], q[a]);
-  return {best_error, settled && active};
+  for (int a = 0; a < kDof; ++a) q[a] = select(active, best.q[a], q[a]);
+  return {best.error, settled && active};
 }
 
 }  // namespace dhkin

@@ -30,7 +30,6 @@
 
 namespace dhkin {
 
-
 // refine() per lane (see the convention above) from q (in place; each lane ends as its best
 // iterate) towards `target` (DH frame 0 -> n), for a chain of kDof joints whose constant frames
 // have the shapes `shape`. Lanes outside `active` take no part (q is left there as it is, the
@@ -81,9 +80,7 @@ inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape
   const double goal = kRefineFraction * tolerance;
   const JointsT<Lanes> start = q;
   evaluate(q, *now);
-  JointsT<Lanes> best = q;
-  PoseErrorT<Lanes> best_error = now->error;
-  Lanes best_size = now->size;
+  BestIterates best{q, now->error, now->size};
   const double floor = (goal / kMaxJointStep) * (goal / kMaxJointStep);
   Lanes damping(std::max(floor, settings.damping_start));
   Lanes evaluations(1.0);  // counts, exact in doubles
@@ -135,25 +132,17 @@ inline PoseErrorT<Lanes> refine_lanes_exact(const Chain& chain, const ChainShape
     const Mask stop =
         running && ((polishing && no_gain) || (settings.stop_on_stall && stalled));
     // at the rounding of the arithmetic: the trial is kept if it is the best
-    const Mask kept = stop && trial->size < best_size;
-    for (int a = 0; a < kDof; ++a) best[a] = select(kept, trial_q[a], best[a]);
-    best_error.position = select(kept, trial->error.position, best_error.position);
-    best_error.rotation = select(kept, trial->error.rotation, best_error.rotation);
-    best_size = select(kept, trial->size, best_size);
+    best.take(stop && trial->size < best.size, trial_q, trial->error, trial->size);
     running = running && !stop;
     if (!any(running)) break;
     // the step taken (lanes that stopped never step again: their iterate is not used)
     q = trial_q;
     std::swap(now, trial);
     damping = select(damping > kDampingStart, max(0.1 * damping, Lanes(floor)), Lanes(floor));
-    const Mask better = running && now->size < best_size;
-    for (int a = 0; a < kDof; ++a) best[a] = select(better, q[a], best[a]);
-    best_error.position = select(better, now->error.position, best_error.position);
-    best_error.rotation = select(better, now->error.rotation, best_error.rotation);
-    best_size = select(better, now->size, best_size);
+    best.take(running && now->size < best.size, q, now->error, now->size);
   }
-  for (int a = 0; a < kDof; ++a) q[a] = select(active, best[a], start[a]);
-  return best_error;
+  for (int a = 0; a < kDof; ++a) q[a] = select(active, best.q[a], start[a]);
+  return best.error;
 }
 
 }  // namespace dhkin

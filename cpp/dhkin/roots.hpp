@@ -198,16 +198,8 @@ inline Point held_member(const Plan& plan, const Frame& T_dh, const Frame& T_at,
 template <std::size_t N>
 inline void refine_held(const Plan& plan, const Frame& T_at, double tolerance,
                         const std::array<bool, N>& exists, std::array<Point, N>& points) {
-  const Chain& chain = plan.chain;
+  const Chain& chain = plan.chain;  // a plan's chain: kDof joints
   const JointMask held = plan.free_joints(kWrist);
-  if (chain.dof() != kDof) {
-    for (std::size_t k = 0; k < N; ++k) {
-      if (!exists[k]) continue;
-      const double r = refine(chain, T_at, points[k].q, held, tolerance, held_settings()).largest();
-      points[k].squared = r * r;
-    }
-    return;
-  }
   const ChainShape shape(chain);
   for (std::size_t first = 0; first < N; first += kLanes) {
     const int count = static_cast<int>(std::min<std::size_t>(kLanes, N - first));

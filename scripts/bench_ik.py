@@ -179,6 +179,8 @@ def eaik_library(robot: dhkin.Robot, workers: int = 1) -> Library | str:
         return "its DH robot takes standard DH rows of revolute joints only"
     eaik = DhRobot(np.array([j.alpha for j in table.joints]), np.array([j.a for j in table.joints]),
                    np.array([j.d for j in table.joints]))
+    if not eaik.hasKnownDecomposition():  # its IK would abort the process (std::terminate)
+        return f"no subproblem decomposition known for this arm ({eaik.getKinematicFamily()})"
     offset = np.array([j.offset for j in table.joints])
     direction = np.array([j.direction for j in table.joints], dtype=float)
     state: dict[str, Any] = {}
